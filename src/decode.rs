@@ -1,0 +1,125 @@
+//! Image decoding with limits checked from the header before any pixel is decoded.
+
+use std::io::Cursor;
+
+use image::{ImageFormat, ImageReader, RgbImage};
+use thiserror::Error;
+
+/// Why bytes could not become an RGB image.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum DecodeError {
+    /// No bytes at all.
+    #[error("the image is empty (0 bytes)")]
+    Empty,
+    /// Not a JPEG or PNG.
+    #[error("unsupported image format: expected JPEG or PNG, got {0}")]
+    Unsupported(String),
+    /// The header announces more pixels than allowed.
+    #[error("image is {width}x{height} = {pixels} pixels, over the limit of {limit}")]
+    TooManyPixels {
+        /// Width from the header.
+        width: u32,
+        /// Height from the header.
+        height: u32,
+        /// width × height.
+        pixels: u64,
+        /// The configured limit.
+        limit: u64,
+    },
+    /// The data is corrupt or truncated.
+    #[error("the image could not be decoded: {0}")]
+    Corrupt(String),
+}
+
+/// The format of `bytes` from its magic number, if it is one the engine reads.
+pub fn sniff(bytes: &[u8]) -> Result<ImageFormat, DecodeError> {
+    if bytes.is_empty() {
+        return Err(DecodeError::Empty);
+    }
+    match image::guess_format(bytes) {
+        Ok(f @ (ImageFormat::Jpeg | ImageFormat::Png)) => Ok(f),
+        Ok(other) => Err(DecodeError::Unsupported(format!("{other:?}"))),
+        Err(_) => Err(DecodeError::Unsupported("unknown data".into())),
+    }
+}
+
+/// Width and height from the header alone (no pixel is decoded).
+pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), DecodeError> {
+    let format = sniff(bytes)?;
+    ImageReader::with_format(Cursor::new(bytes), format)
+        .into_dimensions()
+        .map_err(|e| DecodeError::Corrupt(e.to_string()))
+}
+
+/// Decodes JPEG or PNG `bytes` to 8-bit RGB, refusing more than `max_pixels` pixels
+/// before allocating them, and refusing truncated JPEG streams (no end-of-image
+/// marker), which decoders would otherwise fill in silently.
+pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError> {
+    let format = sniff(bytes)?;
+    let (width, height) = dimensions(bytes)?;
+    let pixels = width as u64 * height as u64;
+    if pixels > max_pixels {
+        return Err(DecodeError::TooManyPixels { width, height, pixels, limit: max_pixels });
+    }
+    if format == ImageFormat::Jpeg && !has_jpeg_end(bytes) {
+        return Err(DecodeError::Corrupt("truncated JPEG (no end-of-image marker)".into()));
+    }
+    let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(width);
+    limits.max_image_height = Some(height);
+    reader.limits(limits);
+    let img = reader.decode().map_err(|e| DecodeError::Corrupt(e.to_string()))?;
+    Ok(img.into_rgb8())
+}
+
+/// True when the JPEG stream ends with EOI (0xFFD9), allowing trailing padding.
+fn has_jpeg_end(bytes: &[u8]) -> bool {
+    let tail = &bytes[bytes.len().saturating_sub(64)..];
+    tail.windows(2).any(|w| w == [0xFF, 0xD9])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png_bytes(w: u32, h: u32) -> Vec<u8> {
+        crate::report::png(&vec![7u8; (w * h * 3) as usize], w, h, image::ExtendedColorType::Rgb8)
+    }
+
+    #[test]
+    fn decodes_png_and_rejects_bad_input() {
+        let img = decode_rgb(&png_bytes(20, 10), 1000).unwrap();
+        assert_eq!(img.dimensions(), (20, 10));
+        assert_eq!(decode_rgb(&[], 10), Err(DecodeError::Empty));
+        assert!(matches!(decode_rgb(b"hello world", 10), Err(DecodeError::Unsupported(_))));
+        assert!(matches!(decode_rgb(b"GIF89a......", 10), Err(DecodeError::Unsupported(_))));
+        assert!(matches!(decode_rgb(&png_bytes(20, 10), 100), Err(DecodeError::TooManyPixels { pixels: 200, .. })));
+        let bytes = png_bytes(20, 10);
+        assert!(matches!(decode_rgb(&bytes[..bytes.len() / 2], 1000), Err(DecodeError::Corrupt(_))));
+    }
+
+    fn crc32(data: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in data {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            }
+        }
+        !crc
+    }
+
+    #[test]
+    fn huge_header_is_refused_without_decoding() {
+        // A PNG header announcing 60000x60000 with no pixel data behind it.
+        let mut bytes = png_bytes(1, 1);
+        bytes[16..20].copy_from_slice(&60000u32.to_be_bytes());
+        bytes[20..24].copy_from_slice(&60000u32.to_be_bytes());
+        // IHDR's CRC covers its type and data (bytes 12..29), stored at 29..33.
+        let crc = crc32(&bytes[12..29]);
+        bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+        assert_eq!(dimensions(&bytes).unwrap(), (60000, 60000));
+        assert!(matches!(decode_rgb(&bytes, 1 << 24), Err(DecodeError::TooManyPixels { .. })));
+    }
+}

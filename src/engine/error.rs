@@ -1,0 +1,55 @@
+//! Errors of the engine: every variant carries the offending values.
+
+use thiserror::Error;
+
+/// Everything that can go wrong inside the pure engine.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum EngineError {
+    /// A parameter is outside its allowed range.
+    #[error("parameter `{name}` = {value} is out of range: {expected}")]
+    InvalidParameter {
+        /// Parameter name as spelled in presets and option overrides.
+        name: &'static str,
+        /// The rejected value, printed.
+        value: String,
+        /// What would have been accepted.
+        expected: &'static str,
+    },
+    /// An options object that does not parse as parameter overrides (unknown field,
+    /// wrong type).
+    #[error("invalid options: {0}")]
+    BadOptions(String),
+    /// An unknown preset name was asked for.
+    #[error("unknown preset `{0}` (known: {1})")]
+    UnknownPreset(String, String),
+    /// An end point lies outside the image.
+    #[error("endpoint #{index} ({x}, {y}) lies outside the {width}x{height} image")]
+    EndpointOutside {
+        /// Position of the end in the given list.
+        index: usize,
+        /// Horizontal coordinate, pixels.
+        x: f64,
+        /// Vertical coordinate, pixels.
+        y: f64,
+        /// Image width, pixels.
+        width: u32,
+        /// Image height, pixels.
+        height: u32,
+    },
+    /// An end point is not a finite number.
+    #[error("endpoint #{index} is not a finite coordinate pair")]
+    EndpointNotFinite {
+        /// Position of the end in the given list.
+        index: usize,
+    },
+    /// The image is too small to segment with the given parameters.
+    #[error("image {width}x{height} is too small: at least {min}x{min} pixels are needed")]
+    ImageTooSmall {
+        /// Image width, pixels.
+        width: u32,
+        /// Image height, pixels.
+        height: u32,
+        /// Smallest accepted side, pixels.
+        min: u32,
+    },
+}

@@ -1,0 +1,119 @@
+//! Choosing walks and pairing ends into cables, globally.
+//!
+//! Every walk is a hypothesis "the cable from end A goes there": to another end B, out
+//! of the frame, or nowhere in particular (lost). Hypotheses are scored by walk quality
+//! times a factor for how they ended (a closing walk confirmed by a walk from the other
+//! end scores highest) and accepted greedily from the best down, so that each end
+//! belongs to at most one cable and no cable is reported twice.
+
+use super::Params;
+use super::walk::{Walk, WalkEnd};
+
+/// How an accepted cable's far end was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FarEnd {
+    /// Another given end.
+    Seed(usize),
+    /// The image border.
+    Border,
+    /// The walk lost the cable here.
+    Open,
+}
+
+/// An accepted cable hypothesis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pairing {
+    /// The seed the kept walk starts from.
+    pub start: usize,
+    /// Where it ends.
+    pub far: FarEnd,
+    /// Index of the kept walk.
+    pub walk: usize,
+    /// Score in 0..=1.
+    pub score: f32,
+}
+
+/// Pairs `n_seeds` ends using `walks` (see module docs). The result is ordered by
+/// decreasing score.
+pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
+    // Which ordered (from, to) closures exist, to find confirmed pairs.
+    let closes = |from: usize, to: usize| {
+        walks
+            .iter()
+            .any(|w| w.seed == from && w.end == WalkEnd::Seed(to))
+    };
+    let mut hypotheses: Vec<Pairing> = walks
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.length_px >= params.min_cable_length_px)
+        .map(|(i, w)| {
+            let (far, factor) = match w.end {
+                WalkEnd::Seed(t) if closes(t, w.seed) => (FarEnd::Seed(t), 1.0),
+                WalkEnd::Seed(t) => (FarEnd::Seed(t), params.unconfirmed_factor),
+                WalkEnd::Border => (FarEnd::Border, params.border_factor),
+                WalkEnd::Lost => (FarEnd::Open, params.lost_factor),
+            };
+            Pairing { start: w.seed, far, walk: i, score: w.quality() * factor }
+        })
+        .filter(|h| h.score >= params.min_cable_score)
+        .collect();
+    hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let mut used = vec![false; n_seeds];
+    let mut accepted = Vec::new();
+    for h in hypotheses {
+        if used[h.start] {
+            continue;
+        }
+        if let FarEnd::Seed(t) = h.far {
+            if used[t] {
+                continue;
+            }
+            used[t] = true;
+        }
+        used[h.start] = true;
+        accepted.push(h);
+    }
+    accepted
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn walk(seed: usize, end: WalkEnd, q: f32) -> Walk {
+        Walk { seed, vertices: vec![0, 1], end, visual: q, smoothness: 1.0, contrast: 1.0, length_px: 100.0 }
+    }
+
+    #[test]
+    fn each_end_used_once_and_confirmed_pairs_win() {
+        let p = Params::default();
+        let walks = vec![
+            walk(0, WalkEnd::Seed(1), 0.9),
+            walk(1, WalkEnd::Seed(0), 0.8),
+            walk(2, WalkEnd::Seed(1), 0.95), // unconfirmed: 0.95 * 0.8 < 0.9
+            walk(2, WalkEnd::Border, 0.7),
+            walk(3, WalkEnd::Lost, 0.9),
+        ];
+        let got = pair(&walks, 4, &p);
+        assert_eq!(got.len(), 3);
+        assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
+        assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
+        assert_eq!((got[2].start, got[2].far), (3, FarEnd::Open));
+        let mut ends: Vec<usize> = got.iter().map(|h| h.start).collect();
+        ends.extend(got.iter().filter_map(|h| match h.far {
+            FarEnd::Seed(t) => Some(t),
+            _ => None,
+        }));
+        ends.sort_unstable();
+        assert_eq!(ends, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn short_or_weak_walks_are_dropped() {
+        let p = Params::default();
+        let mut short = walk(0, WalkEnd::Border, 1.0);
+        short.length_px = 5.0;
+        let weak = walk(1, WalkEnd::Lost, 0.01);
+        assert!(pair(&[short, weak], 2, &p).is_empty());
+    }
+}

@@ -1,0 +1,240 @@
+//! Parameters of the engine and the named presets.
+//!
+//! Every constant of the method is a field here, documented with its unit and the value
+//! the paper or the authors' code used where it differs from ours. A [`Params`] is built
+//! from a named preset and optionally overridden field by field from JSON (the service's
+//! `options`, a presets file); [`Params::validate`] rejects zero or absurd values.
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+
+use super::EngineError;
+
+/// All tunable parameters of the engine, flat so that a JSON override such as
+/// `{"n_segments": 1500}` names a field directly.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    // --- superpixels (SLIC) ---
+    /// Wanted number of superpixels (paper: 2000; 1500 for cluttered scenes).
+    pub n_segments: u32,
+    /// SLIC compactness m: weight of spatial against colour distance (paper: 20; 10 for clutter).
+    pub compactness: f32,
+    /// Standard deviation of the Gaussian pre-blur, pixels; 0 disables it (paper: 1).
+    pub sigma: f32,
+    /// Number of k-means iterations.
+    pub slic_iterations: u32,
+    /// Fragments smaller than this fraction of the nominal superpixel area are merged
+    /// into a neighbour when connectivity is enforced.
+    pub min_size_factor: f32,
+
+    // --- graph ---
+    /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
+    /// (paper: 8, authors' code: 3).
+    pub hist_bins: u32,
+
+    // --- walks ---
+    /// Order d of the neighbourhood searched at every step, in graph hops (paper: 3).
+    pub neighbourhood_order: u32,
+    /// Sharpness c_V of the Bradford visual likelihood (authors' code: 0.5, which barely
+    /// separates colours; we use a sharper value).
+    pub c_visual: f32,
+    /// Sharpness c_D of the Bradford distance likelihood (paper: 0.5).
+    pub c_distance: f32,
+    /// D_max: candidates further than this from the walk's head are ignored, pixels (paper: 100).
+    pub max_step_px: f32,
+    /// Concentration kappa of the von Mises curvature likelihood (authors' code: 1 to 4).
+    pub kappa: f32,
+    /// Largest turn accepted in one step, degrees (authors' code: 90).
+    pub max_turn_deg: f32,
+    /// How far back, in pixels, the walk's heading is measured (smooths superpixel jitter).
+    pub heading_span_px: f32,
+    /// r: a walk closes when its head is this close to another end, pixels (paper: 20).
+    pub close_radius_px: f32,
+    /// A walk stops when the best candidate's colour similarity to the walk's colour
+    /// model falls below this (histogram intersection, 0..1).
+    pub min_similarity: f32,
+    /// Weight of the newest vertex in the walk's running colour model (0..1).
+    pub model_rate: f32,
+    /// A walk is treated as leaving the frame when its head is this close to the border
+    /// and heading outwards, pixels.
+    pub border_margin_px: f32,
+    /// Iteration cap of one walk (authors' code: 100).
+    pub max_steps: u32,
+
+    // --- pairing ---
+    /// Score factor of a walk that closed on another end but whose reverse walk did not
+    /// confirm it (0..1; 1 ignores confirmation).
+    pub unconfirmed_factor: f32,
+    /// Score factor of a walk that left through the border (one-ended cable).
+    pub border_factor: f32,
+    /// Score factor of a walk that lost the cable before an end or the border.
+    pub lost_factor: f32,
+    /// Cables scoring below this are not reported (0..1).
+    pub min_cable_score: f32,
+    /// Walks shorter than this are never reported as cables, pixels.
+    pub min_cable_length_px: f32,
+
+    // --- model ---
+    /// Smoothing weight of the penalised B-spline fit (second-difference penalty).
+    pub smoothing: f32,
+    /// Spacing of the interior knots along the curve, pixels.
+    pub knot_spacing_px: f32,
+    /// Spacing of the reported polyline's samples, pixels.
+    pub polyline_step_px: f32,
+    /// Refine the centreline on the image (sub-pixel) before the final fit.
+    pub refine: bool,
+    /// Half-length of the profiles sampled across the curve during refinement, pixels.
+    pub refine_radius_px: f32,
+    /// Width of the stroke drawn for each cable in the masks, pixels; 0 means the
+    /// measured width of each cable. The default, 7, is the stroke of the dataset's
+    /// hand-drawn masks.
+    pub mask_width_px: f32,
+}
+
+/// Names of the built-in presets, in the order `--help` lists them.
+pub const PRESET_NAMES: [&str; 2] = ["default", "clutter"];
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            n_segments: 2000,
+            compactness: 20.0,
+            sigma: 1.0,
+            slic_iterations: 10,
+            min_size_factor: 0.25,
+            hist_bins: 4,
+            neighbourhood_order: 3,
+            c_visual: 20.0,
+            c_distance: 0.5,
+            max_step_px: 100.0,
+            kappa: 4.0,
+            max_turn_deg: 60.0,
+            heading_span_px: 25.0,
+            close_radius_px: 20.0,
+            min_similarity: 0.3,
+            model_rate: 0.3,
+            border_margin_px: 12.0,
+            max_steps: 150,
+            unconfirmed_factor: 0.8,
+            border_factor: 0.9,
+            lost_factor: 0.4,
+            min_cable_score: 0.05,
+            min_cable_length_px: 30.0,
+            smoothing: 1.0,
+            knot_spacing_px: 30.0,
+            polyline_step_px: 2.0,
+            refine: true,
+            refine_radius_px: 10.0,
+            mask_width_px: 7.0,
+        }
+    }
+}
+
+impl Params {
+    /// The built-in preset of that name: `default` (2000 segments, compactness 20,
+    /// sigma 1) or `clutter` (1500, 10, 1), the paper's two settings.
+    pub fn preset(name: &str) -> Result<Self, EngineError> {
+        match name {
+            "default" => Ok(Self::default()),
+            "clutter" => Ok(Self {
+                n_segments: 1500,
+                compactness: 10.0,
+                ..Self::default()
+            }),
+            other => Err(EngineError::UnknownPreset(
+                other.to_string(),
+                PRESET_NAMES.join(", "),
+            )),
+        }
+    }
+
+    /// These parameters with the fields named in `overrides` replaced, then validated.
+    /// Unknown field names and values of the wrong type are rejected.
+    pub fn with_overrides(&self, overrides: &Map<String, Value>) -> Result<Self, EngineError> {
+        let mut merged = match serde_json::to_value(self) {
+            Ok(Value::Object(map)) => map,
+            _ => unreachable!("Params always serialises to an object"),
+        };
+        for (key, value) in overrides {
+            merged.insert(key.clone(), value.clone());
+        }
+        let params: Self = serde_json::from_value(Value::Object(merged))
+            .map_err(|e| EngineError::BadOptions(e.to_string()))?;
+        params.validate()?;
+        Ok(params)
+    }
+
+    /// Checks every field against its allowed range.
+    pub fn validate(&self) -> Result<(), EngineError> {
+        check("n_segments", self.n_segments as f32, 16.0, 20_000.0, "16 ..= 20000")?;
+        check("compactness", self.compactness, 0.01, 1000.0, "0.01 ..= 1000")?;
+        check("sigma", self.sigma, 0.0, 10.0, "0 ..= 10")?;
+        check("slic_iterations", self.slic_iterations as f32, 1.0, 50.0, "1 ..= 50")?;
+        check("min_size_factor", self.min_size_factor, 0.0, 1.0, "0 ..= 1")?;
+        check("hist_bins", self.hist_bins as f32, 1.0, 16.0, "1 ..= 16")?;
+        check("neighbourhood_order", self.neighbourhood_order as f32, 1.0, 8.0, "1 ..= 8")?;
+        check("c_visual", self.c_visual, 0.01, 1000.0, "0.01 ..= 1000")?;
+        check("c_distance", self.c_distance, 0.01, 1000.0, "0.01 ..= 1000")?;
+        check("max_step_px", self.max_step_px, 1.0, 1000.0, "1 ..= 1000")?;
+        check("kappa", self.kappa, 0.0, 100.0, "0 ..= 100")?;
+        check("max_turn_deg", self.max_turn_deg, 1.0, 180.0, "1 ..= 180")?;
+        check("heading_span_px", self.heading_span_px, 1.0, 500.0, "1 ..= 500")?;
+        check("close_radius_px", self.close_radius_px, 1.0, 500.0, "1 ..= 500")?;
+        check("min_similarity", self.min_similarity, 0.0, 1.0, "0 ..= 1")?;
+        check("model_rate", self.model_rate, 0.0, 1.0, "0 ..= 1")?;
+        check("border_margin_px", self.border_margin_px, 0.0, 200.0, "0 ..= 200")?;
+        check("max_steps", self.max_steps as f32, 1.0, 10_000.0, "1 ..= 10000")?;
+        check("unconfirmed_factor", self.unconfirmed_factor, 0.0, 1.0, "0 ..= 1")?;
+        check("border_factor", self.border_factor, 0.0, 1.0, "0 ..= 1")?;
+        check("lost_factor", self.lost_factor, 0.0, 1.0, "0 ..= 1")?;
+        check("min_cable_score", self.min_cable_score, 0.0, 1.0, "0 ..= 1")?;
+        check("min_cable_length_px", self.min_cable_length_px, 0.0, 10_000.0, "0 ..= 10000")?;
+        check("smoothing", self.smoothing, 0.0, 1e6, "0 ..= 1e6")?;
+        check("knot_spacing_px", self.knot_spacing_px, 2.0, 10_000.0, "2 ..= 10000")?;
+        check("polyline_step_px", self.polyline_step_px, 0.1, 100.0, "0.1 ..= 100")?;
+        check("refine_radius_px", self.refine_radius_px, 1.0, 100.0, "1 ..= 100")?;
+        check("mask_width_px", self.mask_width_px, 0.0, 200.0, "0 ..= 200")?;
+        Ok(())
+    }
+}
+
+fn check(name: &'static str, value: f32, min: f32, max: f32, expected: &'static str) -> Result<(), EngineError> {
+    if value.is_finite() && (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(EngineError::InvalidParameter {
+            name,
+            value: value.to_string(),
+            expected,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_are_valid_and_published() {
+        for name in PRESET_NAMES {
+            Params::preset(name).unwrap().validate().unwrap();
+        }
+        let c = Params::preset("clutter").unwrap();
+        assert_eq!((c.n_segments, c.compactness, c.sigma), (1500, 10.0, 1.0));
+        let d = Params::preset("default").unwrap();
+        assert_eq!((d.n_segments, d.compactness, d.sigma), (2000, 20.0, 1.0));
+        assert!(matches!(Params::preset("nope"), Err(EngineError::UnknownPreset(..))));
+    }
+
+    #[test]
+    fn overrides_replace_and_validate() {
+        let base = Params::default();
+        let o: Map<String, Value> = serde_json::from_str(r#"{"n_segments": 1200}"#).unwrap();
+        assert_eq!(base.with_overrides(&o).unwrap().n_segments, 1200);
+        for bad in [r#"{"n_segments": 0}"#, r#"{"sigma": -1}"#, r#"{"bogus": 1}"#, r#"{"kappa": "x"}"#] {
+            let o: Map<String, Value> = serde_json::from_str(bad).unwrap();
+            assert!(base.with_overrides(&o).is_err(), "{bad} accepted");
+        }
+    }
+}

@@ -1,0 +1,301 @@
+//! SLIC superpixels (Achanta et al. 2012) with connectivity enforcement.
+//!
+//! k-means on (L, a, b, x, y) restricted to a 2S x 2S window around each centre, with
+//! distance D² = d_lab² + (d_xy / S)² · m². The assignment loop runs over contiguous row
+//! slices of structure-of-arrays planes with a branch-free select, which the compiler
+//! vectorises. Afterwards every label is made one 4-connected region: fragments smaller
+//! than `min_size_factor · S²` join the region they touch, larger ones get labels of
+//! their own.
+
+use super::color::LabImage;
+
+/// A label image: one superpixel id per pixel, ids dense in `0..count`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Superpixels {
+    /// Width, pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Row-major superpixel id of each pixel.
+    pub labels: Vec<u32>,
+    /// Number of superpixels; every id below it labels at least one pixel.
+    pub count: usize,
+    /// Nominal grid step S in pixels (sqrt of pixels per superpixel).
+    pub step: f32,
+}
+
+/// SLIC settings (see [`crate::engine::Params`] for their meaning and defaults).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlicSettings {
+    /// Wanted number of superpixels.
+    pub n_segments: u32,
+    /// Compactness m.
+    pub compactness: f32,
+    /// k-means iterations.
+    pub iterations: u32,
+    /// Minimum fragment size as a fraction of S².
+    pub min_size_factor: f32,
+}
+
+#[derive(Clone, Copy)]
+struct Centre {
+    l: f32,
+    a: f32,
+    b: f32,
+    x: f32,
+    y: f32,
+}
+
+/// Over-segments `lab` (already blurred if wanted) into about `n_segments` superpixels.
+pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
+    let (w, h) = (lab.width, lab.height);
+    let n = w * h;
+    let step = ((n as f32) / s.n_segments.max(1) as f32).sqrt().max(1.0);
+    let nx = ((w as f32 / step).round() as usize).max(1);
+    let ny = ((h as f32 / step).round() as usize).max(1);
+    let (cw, ch) = (w as f32 / nx as f32, h as f32 / ny as f32);
+
+    let mut centres = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let x = ((i as f32 + 0.5) * cw).min(w as f32 - 1.0);
+            let y = ((j as f32 + 0.5) * ch).min(h as f32 - 1.0);
+            let idx = y as usize * w + x as usize;
+            centres.push(Centre { l: lab.l[idx], a: lab.a[idx], b: lab.b[idx], x, y });
+        }
+    }
+    // Initial labels: the grid cell, so that a pixel no window reaches still has one.
+    let mut labels: Vec<u32> = (0..n)
+        .map(|p| {
+            let (x, y) = (p % w, p / w);
+            let i = ((x as f32 / cw) as usize).min(nx - 1);
+            let j = ((y as f32 / ch) as usize).min(ny - 1);
+            (j * nx + i) as u32
+        })
+        .collect();
+    let mut dist = vec![f32::INFINITY; n];
+    let spatial = (s.compactness / step).powi(2);
+    let radius = step.ceil() as isize;
+    let mut sums = vec![[0.0f64; 6]; centres.len()];
+
+    for _ in 0..s.iterations {
+        dist.fill(f32::INFINITY);
+        for (k, c) in centres.iter().enumerate() {
+            let x0 = (c.x as isize - radius).max(0) as usize;
+            let x1 = ((c.x as isize + radius + 1) as usize).min(w);
+            let y0 = (c.y as isize - radius).max(0) as usize;
+            let y1 = ((c.y as isize + radius + 1) as usize).min(h);
+            if x0 >= x1 || y0 >= y1 {
+                continue;
+            }
+            for y in y0..y1 {
+                let dy = y as f32 - c.y;
+                let dy2 = dy * dy * spatial;
+                let row = y * w;
+                let range = row + x0..row + x1;
+                let (pl, pa, pb) = (&lab.l[range.clone()], &lab.a[range.clone()], &lab.b[range.clone()]);
+                let pd = &mut dist[range.clone()];
+                let plab = &mut labels[range];
+                let base_dx = x0 as f32 - c.x;
+                for i in 0..pd.len() {
+                    let dl = pl[i] - c.l;
+                    let da = pa[i] - c.a;
+                    let db = pb[i] - c.b;
+                    let dx = base_dx + i as f32;
+                    let d = dl * dl + da * da + db * db + dx * dx * spatial + dy2;
+                    let better = d < pd[i];
+                    pd[i] = if better { d } else { pd[i] };
+                    plab[i] = if better { k as u32 } else { plab[i] };
+                }
+            }
+        }
+        sums.iter_mut().for_each(|s| *s = [0.0; 6]);
+        for y in 0..h {
+            let mut row_sums_label = u32::MAX;
+            let mut acc = [0.0f64; 6];
+            for x in 0..w {
+                let p = y * w + x;
+                let k = labels[p];
+                if k != row_sums_label {
+                    if row_sums_label != u32::MAX {
+                        add(&mut sums[row_sums_label as usize], &acc);
+                    }
+                    row_sums_label = k;
+                    acc = [0.0; 6];
+                }
+                acc[0] += lab.l[p] as f64;
+                acc[1] += lab.a[p] as f64;
+                acc[2] += lab.b[p] as f64;
+                acc[3] += x as f64;
+                acc[4] += y as f64;
+                acc[5] += 1.0;
+            }
+            if row_sums_label != u32::MAX {
+                add(&mut sums[row_sums_label as usize], &acc);
+            }
+        }
+        for (c, s) in centres.iter_mut().zip(&sums) {
+            if s[5] > 0.0 {
+                let inv = 1.0 / s[5];
+                *c = Centre {
+                    l: (s[0] * inv) as f32,
+                    a: (s[1] * inv) as f32,
+                    b: (s[2] * inv) as f32,
+                    x: (s[3] * inv) as f32,
+                    y: (s[4] * inv) as f32,
+                };
+            }
+        }
+    }
+    let min_size = ((s.min_size_factor * step * step) as usize).max(1);
+    let (labels, count) = enforce_connectivity(&labels, w, h, min_size);
+    Superpixels { width: w, height: h, labels, count, step }
+}
+
+fn add(sum: &mut [f64; 6], acc: &[f64; 6]) {
+    for (s, a) in sum.iter_mut().zip(acc) {
+        *s += a;
+    }
+}
+
+/// Relabels so that every label is one 4-connected region. A fragment of fewer than
+/// `min_size` pixels takes the label of the region it touches before it in raster
+/// order (so the merged region stays connected); any other fragment gets a fresh label.
+/// Returns the new labels and their count.
+pub fn enforce_connectivity(labels: &[u32], w: usize, h: usize, min_size: usize) -> (Vec<u32>, usize) {
+    const UNSET: u32 = u32::MAX;
+    let mut out = vec![UNSET; labels.len()];
+    let mut component: Vec<usize> = Vec::new();
+    let mut next = 0u32;
+    for start in 0..labels.len() {
+        if out[start] != UNSET {
+            continue;
+        }
+        let original = labels[start];
+        // A neighbour that already has a final label: the merge target for a small fragment.
+        let (sx, sy) = (start % w, start / w);
+        let adjacent = if sx > 0 && out[start - 1] != UNSET {
+            Some(out[start - 1])
+        } else if sy > 0 {
+            Some(out[start - w])
+        } else {
+            None
+        };
+        component.clear();
+        component.push(start);
+        out[start] = next;
+        let mut head = 0;
+        while head < component.len() {
+            let p = component[head];
+            head += 1;
+            let (x, y) = (p % w, p / w);
+            let mut visit = |q: usize| {
+                if out[q] == UNSET && labels[q] == original {
+                    out[q] = next;
+                    component.push(q);
+                }
+            };
+            if x > 0 {
+                visit(p - 1);
+            }
+            if x + 1 < w {
+                visit(p + 1);
+            }
+            if y > 0 {
+                visit(p - w);
+            }
+            if y + 1 < h {
+                visit(p + w);
+            }
+        }
+        match adjacent {
+            Some(target) if component.len() < min_size => {
+                for &p in &component {
+                    out[p] = target;
+                }
+            }
+            _ => next += 1,
+        }
+    }
+    (out, next as usize)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Every label is one 4-connected region and ids are dense.
+    pub(crate) fn assert_connected_dense(sp: &Superpixels) {
+        let (w, h) = (sp.width, sp.height);
+        let mut seen = vec![false; sp.count];
+        let (_, components) = enforce_connectivity(&sp.labels, w, h, 1);
+        assert_eq!(components, sp.count, "a label has more than one connected region");
+        for &a in &sp.labels {
+            assert!((a as usize) < sp.count);
+            seen[a as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "label ids are not dense");
+    }
+
+    fn two_colour_image(w: usize, h: usize) -> LabImage {
+        let mut rgb = vec![240u8; w * h * 3];
+        for y in 0..h {
+            for x in w / 2..w {
+                let p = (y * w + x) * 3;
+                rgb[p..p + 3].copy_from_slice(&[200, 20, 20]);
+            }
+        }
+        LabImage::from_rgb(&rgb, w, h)
+    }
+
+    #[test]
+    fn superpixels_respect_a_strong_edge() {
+        let lab = two_colour_image(64, 48);
+        let settings = SlicSettings { n_segments: 48, compactness: 10.0, iterations: 10, min_size_factor: 0.25 };
+        let sp = slic(&lab, &settings);
+        assert!(sp.count >= 30 && sp.count <= 70, "count {}", sp.count);
+        assert_connected_dense(&sp);
+        // No superpixel straddles the colour edge at x = 32.
+        let mut side = vec![None; sp.count];
+        for (p, &l) in sp.labels.iter().enumerate() {
+            let right = p % 64 >= 32;
+            let s = side[l as usize].get_or_insert(right);
+            assert_eq!(*s, right, "superpixel {l} straddles the edge");
+        }
+    }
+
+    #[test]
+    fn connectivity_splits_and_merges() {
+        // Label 0 in two far-apart blocks, label 1 elsewhere, and a one-pixel island.
+        #[rustfmt::skip]
+        let labels = vec![
+            0, 0, 1, 1, 0, 0,
+            0, 0, 1, 1, 0, 0,
+            1, 1, 1, 2, 1, 1,
+        ];
+        let (out, count) = enforce_connectivity(&labels, 6, 3, 2);
+        assert_eq!(count, 3);
+        assert_eq!(out[0], out[1]);
+        assert_ne!(out[0], out[4]);
+        assert_eq!(out[15], out[14], "the island merged into its neighbour");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        #[test]
+        fn every_pixel_labelled_and_labels_connected(
+            w in 8usize..48, h in 8usize..48, seed in any::<u64>(), n in 4u32..80, m in 1.0f32..40.0
+        ) {
+            let mut state = seed | 1;
+            let rgb: Vec<u8> = (0..w * h * 3).map(|_| {
+                state ^= state << 13; state ^= state >> 7; state ^= state << 17;
+                (state >> 56) as u8
+            }).collect();
+            let lab = LabImage::from_rgb(&rgb, w, h);
+            let sp = slic(&lab, &SlicSettings { n_segments: n, compactness: m, iterations: 5, min_size_factor: 0.25 });
+            prop_assert_eq!(sp.labels.len(), w * h);
+            assert_connected_dense(&sp);
+        }
+    }
+}

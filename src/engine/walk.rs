@@ -1,0 +1,313 @@
+//! Walks on the region adjacency graph: likelihoods, extension and termination.
+//!
+//! From every end ("seed") a walk starts towards each ring-1 neighbour of the seed's
+//! superpixel; the first step fixes the initial heading. Each iteration scores every
+//! vertex of the order-d neighbourhood of the head that lies ahead,
+//! p = p_V · p_C · p_D, and appends the argmax:
+//!
+//! - p_V = 1 / (1 + c_V (1 − I)), the Bradford density at 1 − I normalised to 1 at
+//!   I = 1, where I is the histogram intersection between the candidate and the walk's
+//!   running colour model (not only the last vertex: the model stops slow drift);
+//! - p_C = exp(κ (cos φ − 1)), a von Mises density in the turn φ between the walk's
+//!   heading (measured over `heading_span_px`, which smooths centroid jitter) and the
+//!   step, normalised to 1 at φ = 0; turns above `max_turn_deg` are refused;
+//! - p_D = 1 / (1 + c_D d / D_max), the Bradford density in the step length.
+//!
+//! A walk ends on reaching another seed (within r), on leaving the frame, when the best
+//! candidate's colour no longer matches the model (it left the cable) or at the
+//! iteration cap. Each walk records the evidence pairing needs: mean colour agreement,
+//! smoothness, and how much its vertices stand out from their sides (a cable is a thin
+//! structure; a walk over plain background is not).
+
+use super::Params;
+use super::color::LabImage;
+use super::graph::{Graph, Neighbourhood, intersection};
+
+/// An end given to the walker: its point and the superpixel that contains it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Seed {
+    /// Pixel coordinates (x, y).
+    pub point: [f32; 2],
+    /// Superpixel id containing the point.
+    pub vertex: u32,
+}
+
+/// Why a walk stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WalkEnd {
+    /// It reached the seed with this index.
+    Seed(usize),
+    /// It left the image through the border.
+    Border,
+    /// It lost the cable (colour mismatch, no candidate ahead, or iteration cap).
+    Lost,
+}
+
+/// One finished walk.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Walk {
+    /// Index of the seed it started from.
+    pub seed: usize,
+    /// Visited superpixels in order, the seed's own first.
+    pub vertices: Vec<u32>,
+    /// How it ended.
+    pub end: WalkEnd,
+    /// Geometric mean of the colour likelihoods of its steps, 0..=1.
+    pub visual: f32,
+    /// Geometric mean of the curvature likelihoods of its steps, 0..=1.
+    pub smoothness: f32,
+    /// Mean lateral contrast of its vertices, 0..=1 (1: clearly a thin structure).
+    pub contrast: f32,
+    /// Length along the centroids, pixels.
+    pub length_px: f32,
+}
+
+impl Walk {
+    /// Overall quality in 0..=1: colour agreement × smoothness × lateral contrast.
+    pub fn quality(&self) -> f32 {
+        self.visual * self.smoothness * self.contrast
+    }
+}
+
+/// Lab distance at which lateral contrast saturates at 1 (a clearly visible edge).
+const CONTRAST_SATURATION: f32 = 25.0;
+
+/// Runs all walks from all seeds. `lab` is used to measure lateral contrast.
+pub fn walk_all(graph: &Graph, lab: &LabImage, seeds: &[Seed], step_px: f32, params: &Params) -> Vec<Walk> {
+    let mut walker = Walker::new(graph, lab, seeds, step_px, params);
+    let mut walks = Vec::new();
+    for (s, seed) in seeds.iter().enumerate() {
+        for &first in graph.neighbours(seed.vertex) {
+            if let Some(w) = walker.run(s, first) {
+                walks.push(w);
+            }
+        }
+    }
+    walks
+}
+
+struct Walker<'a> {
+    graph: &'a Graph,
+    lab: &'a LabImage,
+    seeds: &'a [Seed],
+    params: &'a Params,
+    /// Lateral offset at which contrast is sampled: one superpixel step.
+    side_px: f32,
+    hood: Neighbourhood,
+    candidates: Vec<(u32, u32)>,
+    in_walk: Vec<u32>,
+    walk_id: u32,
+    model: Vec<f32>,
+    cos_max_turn: f32,
+}
+
+impl<'a> Walker<'a> {
+    fn new(graph: &'a Graph, lab: &'a LabImage, seeds: &'a [Seed], step_px: f32, params: &'a Params) -> Self {
+        Self {
+            graph,
+            lab,
+            seeds,
+            params,
+            side_px: step_px,
+            hood: Neighbourhood::default(),
+            candidates: Vec::new(),
+            in_walk: vec![0; graph.len()],
+            walk_id: 0,
+            model: vec![0.0; graph.histogram_cells()],
+            cos_max_turn: params.max_turn_deg.to_radians().cos(),
+        }
+    }
+
+    fn pos(&self, v: u32) -> [f32; 2] {
+        self.graph.vertices[v as usize].centroid
+    }
+
+    /// One walk from seed `s` whose first step goes to `first`.
+    fn run(&mut self, s: usize, first: u32) -> Option<Walk> {
+        let p = self.params;
+        let seed = self.seeds[s];
+        self.walk_id += 1;
+        let id = self.walk_id;
+        self.in_walk[seed.vertex as usize] = id;
+        self.in_walk[first as usize] = id;
+        let mut vertices = vec![seed.vertex, first];
+        let mut points = vec![seed.point, self.pos(first)];
+        if dist(points[0], points[1]) < 1e-3 {
+            return None;
+        }
+        self.model.copy_from_slice(self.graph.histogram(first));
+        let mut length = dist(points[0], points[1]);
+        let (mut log_visual, mut log_curve, mut steps) = (0.0f32, 0.0f32, 0u32);
+        let mut contrast_sum = self.contrast(first, heading(&points, p.heading_span_px));
+        let mut end = self.classify(s, &points, length);
+
+        while end.is_none() && (steps as usize) < p.max_steps as usize {
+            let head = *vertices.last().unwrap_or(&first);
+            let dir = heading(&points, p.heading_span_px);
+            let here = *points.last().unwrap_or(&seed.point);
+            self.hood.collect(self.graph, head, p.neighbourhood_order, &mut self.candidates);
+            let mut best: Option<(u32, f32, f32, f32)> = None;
+            for &(c, _) in &self.candidates {
+                if self.in_walk[c as usize] == id {
+                    continue;
+                }
+                let q = self.pos(c);
+                let step = [q[0] - here[0], q[1] - here[1]];
+                let d = (step[0] * step[0] + step[1] * step[1]).sqrt();
+                if d < 1e-3 || d > p.max_step_px {
+                    continue;
+                }
+                let cos = (step[0] * dir[0] + step[1] * dir[1]) / d;
+                if cos < self.cos_max_turn {
+                    continue;
+                }
+                let sim = intersection(&self.model, self.graph.histogram(c));
+                let pv = 1.0 / (1.0 + p.c_visual * (1.0 - sim));
+                let pc = (p.kappa * (cos - 1.0)).exp();
+                let pd = 1.0 / (1.0 + p.c_distance * d / p.max_step_px);
+                let score = pv * pc * pd;
+                if best.is_none_or(|b| score > b.1) {
+                    best = Some((c, score, sim, pc));
+                }
+            }
+            let Some((c, _, sim, pc)) = best else {
+                end = Some(if self.near_border_heading_out(here, dir, 2.0) {
+                    WalkEnd::Border
+                } else {
+                    WalkEnd::Lost
+                });
+                break;
+            };
+            if sim < p.min_similarity {
+                end = Some(if self.near_border_heading_out(here, dir, 2.0) {
+                    WalkEnd::Border
+                } else {
+                    WalkEnd::Lost
+                });
+                break;
+            }
+            self.in_walk[c as usize] = id;
+            let q = self.pos(c);
+            length += dist(here, q);
+            vertices.push(c);
+            points.push(q);
+            log_visual += (1.0 / (1.0 + p.c_visual * (1.0 - sim))).ln();
+            log_curve += pc.ln();
+            steps += 1;
+            let rate = p.model_rate;
+            let hist = self.graph.histogram(c);
+            for (m, h) in self.model.iter_mut().zip(hist) {
+                *m = (1.0 - rate) * *m + rate * h;
+            }
+            contrast_sum += self.contrast(c, heading(&points, p.heading_span_px));
+            end = self.classify(s, &points, length);
+        }
+        let n = steps.max(1) as f32;
+        Some(Walk {
+            seed: s,
+            end: end.unwrap_or(WalkEnd::Lost),
+            visual: (log_visual / n).exp(),
+            smoothness: (log_curve / n).exp(),
+            contrast: contrast_sum / (vertices.len() - 1) as f32,
+            length_px: length,
+            vertices,
+        })
+    }
+
+    /// Termination after a step: another seed reached, or the frame left.
+    fn classify(&self, s: usize, points: &[[f32; 2]], length: f32) -> Option<WalkEnd> {
+        let p = self.params;
+        let here = *points.last()?;
+        if length > p.close_radius_px {
+            let hit = self
+                .seeds
+                .iter()
+                .enumerate()
+                .filter(|&(t, _)| t != s)
+                .map(|(t, seed)| (t, dist(seed.point, here)))
+                .filter(|&(_, d)| d <= p.close_radius_px)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((t, _)) = hit {
+                return Some(WalkEnd::Seed(t));
+            }
+        }
+        let dir = heading(points, p.heading_span_px);
+        self.near_border_heading_out(here, dir, 1.0).then_some(WalkEnd::Border)
+    }
+
+    /// True when `here` lies within `factor · border_margin_px` of an edge that `dir`
+    /// points towards.
+    fn near_border_heading_out(&self, here: [f32; 2], dir: [f32; 2], factor: f32) -> bool {
+        let m = self.params.border_margin_px * factor;
+        let (w, h) = (self.lab.width as f32, self.lab.height as f32);
+        const OUTWARD: f32 = 0.3;
+        (here[0] < m && dir[0] < -OUTWARD)
+            || (here[0] > w - 1.0 - m && dir[0] > OUTWARD)
+            || (here[1] < m && dir[1] < -OUTWARD)
+            || (here[1] > h - 1.0 - m && dir[1] > OUTWARD)
+    }
+
+    /// How much vertex `v` differs in colour from the image one step to either side of
+    /// the heading `dir`: the larger of the two Lab distances, saturating at 1.
+    fn contrast(&self, v: u32, dir: [f32; 2]) -> f32 {
+        let vert = &self.graph.vertices[v as usize];
+        let c = vert.centroid;
+        let normal = [-dir[1], dir[0]];
+        let mut best = 0.0f32;
+        for sign in [-1.0, 1.0] {
+            let x = (c[0] + sign * normal[0] * self.side_px).round();
+            let y = (c[1] + sign * normal[1] * self.side_px).round();
+            if x < 0.0 || y < 0.0 || x >= self.lab.width as f32 || y >= self.lab.height as f32 {
+                continue;
+            }
+            let sample = self.lab.at(y as usize * self.lab.width + x as usize);
+            best = best.max(dist3(sample, vert.mean_lab));
+        }
+        (best / CONTRAST_SATURATION).min(1.0)
+    }
+}
+
+/// Unit heading of a walk: from the last point at least `span` pixels back (or the
+/// first point) to the newest point.
+pub(crate) fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {
+    let Some(&head) = points.last() else {
+        return [1.0, 0.0];
+    };
+    let mut from = points[0];
+    let mut acc = 0.0;
+    for w in points.windows(2).rev() {
+        acc += dist(w[0], w[1]);
+        from = w[0];
+        if acc >= span {
+            break;
+        }
+    }
+    let v = [head[0] - from[0], head[1] - from[1]];
+    let n = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    if n < 1e-6 { [1.0, 0.0] } else { [v[0] / n, v[1] / n] }
+}
+
+#[inline]
+pub(crate) fn dist(a: [f32; 2], b: [f32; 2]) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+}
+
+#[inline]
+fn dist3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heading_uses_the_span() {
+        let pts = [[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [20.0, 5.0]];
+        let h = heading(&pts, 5.0);
+        assert!((h[0] - 0.0).abs() < 1e-6 && (h[1] - 1.0).abs() < 1e-6);
+        let h = heading(&pts, 12.0);
+        assert!(h[0] > 0.9 && h[1] > 0.0);
+        assert_eq!(heading(&[], 3.0), [1.0, 0.0]);
+    }
+}

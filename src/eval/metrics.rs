@@ -1,0 +1,109 @@
+//! The paper's metric (IoU of union masks, weighted by cable count) and cable matching.
+
+use image::GrayImage;
+use serde::Serialize;
+
+use super::ImageResult;
+
+/// Intersection over union of two masks (foreground where > 127). Two empty masks
+/// score 1.
+pub fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
+    let (mut inter, mut union) = (0u64, 0u64);
+    for (&x, &y) in a.as_raw().iter().zip(b.as_raw()) {
+        let (x, y) = (x > 127, y > 127);
+        inter += (x && y) as u64;
+        union += (x || y) as u64;
+    }
+    if union == 0 { 1.0 } else { inter as f64 / union as f64 }
+}
+
+/// Number of one-to-one matches between `found` and `truth` masks with IoU ≥
+/// `min_iou`, chosen greedily from the best pair down.
+pub fn match_cables(found: &[GrayImage], truth: &[GrayImage], min_iou: f64) -> usize {
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, f) in found.iter().enumerate() {
+        for (j, t) in truth.iter().enumerate() {
+            let v = iou(f, t);
+            if v >= min_iou {
+                pairs.push((v, i, j));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let (mut used_f, mut used_t) = (vec![false; found.len()], vec![false; truth.len()]);
+    let mut matched = 0;
+    for (_, i, j) in pairs {
+        if !used_f[i] && !used_t[j] {
+            used_f[i] = true;
+            used_t[j] = true;
+            matched += 1;
+        }
+    }
+    matched
+}
+
+/// Totals over one set of images.
+#[derive(Debug, Clone, Serialize)]
+pub struct SetSummary {
+    /// Set name.
+    pub set: String,
+    /// Number of images.
+    pub images: usize,
+    /// Σ Cᵢ·IoUᵢ / Σ Cᵢ, the paper's metric.
+    pub weighted_iou: f64,
+    /// Matched / true cables.
+    pub cable_recall: f64,
+    /// Matched / found cables.
+    pub cable_precision: f64,
+    /// Median total milliseconds per image.
+    pub median_total_ms: f64,
+}
+
+/// Summaries per set, in first-seen order.
+pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
+    let mut sets: Vec<String> = Vec::new();
+    for r in results {
+        if !sets.contains(&r.set) {
+            sets.push(r.set.clone());
+        }
+    }
+    sets.into_iter()
+        .map(|set| {
+            let rs: Vec<&ImageResult> = results.iter().filter(|r| r.set == set).collect();
+            let cables: usize = rs.iter().map(|r| r.gt_cables).sum();
+            let found: usize = rs.iter().map(|r| r.found_cables).sum();
+            let matched: usize = rs.iter().map(|r| r.matched_cables).sum();
+            let weighted: f64 = rs.iter().map(|r| r.gt_cables as f64 * r.iou).sum();
+            let mut totals: Vec<f64> = rs.iter().map(|r| r.timings_ms.total).collect();
+            totals.sort_by(f64::total_cmp);
+            SetSummary {
+                images: rs.len(),
+                weighted_iou: weighted / cables.max(1) as f64,
+                cable_recall: matched as f64 / cables.max(1) as f64,
+                cable_precision: matched as f64 / found.max(1) as f64,
+                median_total_ms: totals.get(totals.len() / 2).copied().unwrap_or(0.0),
+                set,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::Luma;
+
+    fn rect(x0: u32, x1: u32) -> GrayImage {
+        GrayImage::from_fn(10, 10, |x, _| Luma([if (x0..x1).contains(&x) { 255 } else { 0 }]))
+    }
+
+    #[test]
+    fn iou_and_matching() {
+        assert!((iou(&rect(0, 4), &rect(2, 6)) - 2.0 / 6.0).abs() < 1e-9);
+        assert_eq!(iou(&rect(0, 0), &rect(0, 0)), 1.0);
+        let found = [rect(0, 4), rect(5, 9)];
+        let truth = [rect(0, 5), rect(6, 9), rect(0, 2)];
+        assert_eq!(match_cables(&found, &truth, 0.5), 2);
+        assert_eq!(match_cables(&found, &truth, 0.9), 0);
+    }
+}

@@ -1,0 +1,16 @@
+//! Ariadne: cable (deformable linear object) segmentation and B-spline model
+//! estimation by walks on superpixel graphs, after De Gregorio, Palli and Di Stefano,
+//! "Let's take a Walk on Superpixels Graphs" (ACCV 2018).
+//!
+//! - [`decode`]: image decoding with header-checked limits;
+//! - [`engine`]: the pure algorithm (SLIC → graph → walks → pairing → splines → masks);
+//! - [`eval`]: dataset reading and the paper's metrics;
+//! - [`synth`]: deterministic synthetic cable scenes with known truth;
+//! - [`report`]: the JSON document shared by the command line and the service.
+
+pub mod cli;
+pub mod decode;
+pub mod engine;
+pub mod eval;
+pub mod report;
+pub mod synth;
