@@ -147,6 +147,13 @@ pub fn segment(image: &RgbImage, ends: &[[f64; 2]], params: &Params) -> Result<S
         .collect();
     let walks = walk::walk_all(&graph, &lab, &seeds, sp.step, params);
     let chosen = pairing::pair(&walks, seeds.len(), params);
+    if std::env::var_os("ARIADNE_DEBUG").is_some() {
+        for w in &walks {
+            let last = graph.vertices[*w.vertices.last().unwrap() as usize].centroid;
+            eprintln!("seed {} ({:.0},{:.0}) -> {:?} at ({:.0},{:.0}) n={} len={:.0} vis={:.2} smooth={:.2} contrast={:.2} q={:.3}", w.seed, seeds[w.seed].point[0], seeds[w.seed].point[1], w.end, last[0], last[1], w.vertices.len(), w.length_px, w.visual, w.smoothness, w.contrast, w.quality());
+        }
+        for c in &chosen { eprintln!("chosen {:?}", c); }
+    }
     timings.walks = ms(t);
 
     let t = Instant::now();
@@ -225,6 +232,9 @@ fn model_cable(
     if params.refine {
         for _ in 0..REFINE_PASSES {
             let refined = refine::refine(&polyline, lab, params.refine_radius_px);
+            if std::env::var_os("ARIADNE_DEBUG").is_some() {
+                eprintln!("refine start {:?} coverage {:.2} width {:?}", start, refined.coverage, refined.width_px);
+            }
             width = refined.width_px.or(width);
             let mut pts = refined.points;
             let mut w = vec![1.0; pts.len()];

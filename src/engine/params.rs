@@ -54,6 +54,9 @@ pub struct Params {
     /// A walk stops when the best candidate's colour similarity to the walk's colour
     /// model falls below this (histogram intersection, 0..1).
     pub min_similarity: f32,
+    /// A walk stops when the best candidate's lateral contrast (0..1: how much it differs
+    /// from the image on both sides) falls below this: it has left the thin structure.
+    pub min_contrast: f32,
     /// Weight of the newest vertex in the walk's running colour model (0..1).
     pub model_rate: f32,
     /// A walk is treated as leaving the frame when its head is this close to the border
@@ -105,14 +108,15 @@ impl Default for Params {
             min_size_factor: 0.25,
             hist_bins: 4,
             neighbourhood_order: 3,
-            c_visual: 20.0,
-            c_distance: 0.5,
+            c_visual: 5.0,
+            c_distance: 4.0,
             max_step_px: 100.0,
             kappa: 4.0,
             max_turn_deg: 60.0,
             heading_span_px: 25.0,
             close_radius_px: 20.0,
-            min_similarity: 0.3,
+            min_similarity: 0.1,
+            min_contrast: 0.15,
             model_rate: 0.3,
             border_margin_px: 12.0,
             max_steps: 150,
@@ -125,7 +129,7 @@ impl Default for Params {
             knot_spacing_px: 30.0,
             polyline_step_px: 2.0,
             refine: true,
-            refine_radius_px: 10.0,
+            refine_radius_px: 16.0,
             mask_width_px: 7.0,
         }
     }
@@ -182,6 +186,7 @@ impl Params {
         check("heading_span_px", self.heading_span_px, 1.0, 500.0, "1 ..= 500")?;
         check("close_radius_px", self.close_radius_px, 1.0, 500.0, "1 ..= 500")?;
         check("min_similarity", self.min_similarity, 0.0, 1.0, "0 ..= 1")?;
+        check("min_contrast", self.min_contrast, 0.0, 1.0, "0 ..= 1")?;
         check("model_rate", self.model_rate, 0.0, 1.0, "0 ..= 1")?;
         check("border_margin_px", self.border_margin_px, 0.0, 200.0, "0 ..= 200")?;
         check("max_steps", self.max_steps as f32, 1.0, 10_000.0, "1 ..= 10000")?;

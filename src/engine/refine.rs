@@ -128,17 +128,27 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
     Refined { points, width_px, coverage }
 }
 
-/// Finds the run of cable samples nearest the profile's centre; returns its centre
-/// offset and width in pixels, or `None` when the profile cannot be read.
+/// Finds the cable across one profile; returns its centre offset and width in pixels,
+/// or `None` when the profile cannot be read.
+///
+/// Each sample's "foreground" is its Lab distance to the nearer of the two profile ends
+/// (the local background on either side). The cable is the run around the centre where
+/// foreground exceeds half its peak (a full-width-at-half-maximum reading, so shading and
+/// highlights on the insulation do not bias the edges); the edges are interpolated to
+/// sub-pixel precision.
 fn read_profile(profile: &[[f32; 3]], cable: [f32; 3], centre: usize) -> Option<(f32, f32)> {
     let (left_bg, right_bg) = (profile[0], profile[profile.len() - 1]);
     if de(left_bg, cable) < MIN_BACKGROUND_DE || de(right_bg, cable) < MIN_BACKGROUND_DE {
         return None;
     }
-    // margin > 0: the sample looks like the cable rather than like the background.
-    let margin = |s: [f32; 3]| de(s, left_bg).min(de(s, right_bg)) - de(s, cable);
-    let m: Vec<f32> = profile.iter().map(|&s| margin(s)).collect();
+    let fg: Vec<f32> = profile.iter().map(|&s| de(s, left_bg).min(de(s, right_bg))).collect();
     let search = centre / 2;
+    let peak = fg[centre - search..=centre + search].iter().copied().fold(0.0f32, f32::max);
+    if peak < MIN_BACKGROUND_DE {
+        return None;
+    }
+    let half = 0.5 * peak;
+    let m: Vec<f32> = fg.iter().map(|f| f - half).collect();
     let start = (0..=search)
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;

@@ -65,7 +65,7 @@ pub struct Walk {
 impl Walk {
     /// Overall quality in 0..=1: colour agreement × smoothness × lateral contrast.
     pub fn quality(&self) -> f32 {
-        self.visual * self.smoothness * self.contrast
+        self.visual.sqrt() * self.smoothness * self.contrast * self.contrast
     }
 }
 
@@ -146,7 +146,7 @@ impl<'a> Walker<'a> {
             let dir = heading(&points, p.heading_span_px);
             let here = *points.last().unwrap_or(&seed.point);
             self.hood.collect(self.graph, head, p.neighbourhood_order, &mut self.candidates);
-            let mut best: Option<(u32, f32, f32, f32)> = None;
+            let mut best: Option<(u32, f32, f32, f32, f32)> = None;
             for &(c, _) in &self.candidates {
                 if self.in_walk[c as usize] == id {
                     continue;
@@ -165,27 +165,17 @@ impl<'a> Walker<'a> {
                 let pv = 1.0 / (1.0 + p.c_visual * (1.0 - sim));
                 let pc = (p.kappa * (cos - 1.0)).exp();
                 let pd = 1.0 / (1.0 + p.c_distance * d / p.max_step_px);
-                let score = pv * pc * pd;
+                let contrast = self.contrast(c, [step[0] / d, step[1] / d]);
+                let score = pv * pc * pd * contrast;
                 if best.is_none_or(|b| score > b.1) {
-                    best = Some((c, score, sim, pc));
+                    best = Some((c, score, sim, pc, contrast));
                 }
             }
-            let Some((c, _, sim, pc)) = best else {
-                end = Some(if self.near_border_heading_out(here, dir, 2.0) {
-                    WalkEnd::Border
-                } else {
-                    WalkEnd::Lost
-                });
+            let best = best.filter(|b| b.2 >= p.min_similarity && b.4 >= p.min_contrast);
+            let Some((c, _, sim, pc, contrast)) = best else {
+                end = Some(self.stopped(s, here, dir));
                 break;
             };
-            if sim < p.min_similarity {
-                end = Some(if self.near_border_heading_out(here, dir, 2.0) {
-                    WalkEnd::Border
-                } else {
-                    WalkEnd::Lost
-                });
-                break;
-            }
             self.in_walk[c as usize] = id;
             let q = self.pos(c);
             length += dist(here, q);
@@ -199,7 +189,7 @@ impl<'a> Walker<'a> {
             for (m, h) in self.model.iter_mut().zip(hist) {
                 *m = (1.0 - rate) * *m + rate * h;
             }
-            contrast_sum += self.contrast(c, heading(&points, p.heading_span_px));
+            contrast_sum += contrast;
             end = self.classify(s, &points, length);
         }
         let n = steps.max(1) as f32;
@@ -235,6 +225,33 @@ impl<'a> Walker<'a> {
         self.near_border_heading_out(here, dir, 1.0).then_some(WalkEnd::Border)
     }
 
+    /// How a walk that found no acceptable next vertex ends: on a seed just ahead (the
+    /// last superpixels before a terminal are often not the cable's colour), through the
+    /// border, or lost.
+    fn stopped(&self, s: usize, here: [f32; 2], dir: [f32; 2]) -> WalkEnd {
+        let p = self.params;
+        let reach = 2.0 * p.close_radius_px;
+        let ahead = self
+            .seeds
+            .iter()
+            .enumerate()
+            .filter(|&(t, _)| t != s)
+            .filter_map(|(t, seed)| {
+                let v = [seed.point[0] - here[0], seed.point[1] - here[1]];
+                let d = (v[0] * v[0] + v[1] * v[1]).sqrt();
+                let cos = (v[0] * dir[0] + v[1] * dir[1]) / d.max(1e-6);
+                (d <= reach && cos >= self.cos_max_turn).then_some((t, d))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((t, _)) = ahead {
+            WalkEnd::Seed(t)
+        } else if self.near_border_heading_out(here, dir, 2.0) {
+            WalkEnd::Border
+        } else {
+            WalkEnd::Lost
+        }
+    }
+
     /// True when `here` lies within `factor · border_margin_px` of an edge that `dir`
     /// points towards.
     fn near_border_heading_out(&self, here: [f32; 2], dir: [f32; 2], factor: f32) -> bool {
@@ -248,12 +265,14 @@ impl<'a> Walker<'a> {
     }
 
     /// How much vertex `v` differs in colour from the image one step to either side of
-    /// the heading `dir`: the larger of the two Lab distances, saturating at 1.
+    /// the heading `dir`: the smaller of the two Lab distances (a cable differs from the
+    /// background on both sides; a walk on the background beside a cable only on one),
+    /// saturating at 1.
     fn contrast(&self, v: u32, dir: [f32; 2]) -> f32 {
         let vert = &self.graph.vertices[v as usize];
         let c = vert.centroid;
         let normal = [-dir[1], dir[0]];
-        let mut best = 0.0f32;
+        let mut least = f32::INFINITY;
         for sign in [-1.0, 1.0] {
             let x = (c[0] + sign * normal[0] * self.side_px).round();
             let y = (c[1] + sign * normal[1] * self.side_px).round();
@@ -261,9 +280,9 @@ impl<'a> Walker<'a> {
                 continue;
             }
             let sample = self.lab.at(y as usize * self.lab.width + x as usize);
-            best = best.max(dist3(sample, vert.mean_lab));
+            least = least.min(dist3(sample, vert.mean_lab));
         }
-        (best / CONTRAST_SATURATION).min(1.0)
+        if least.is_finite() { (least / CONTRAST_SATURATION).min(1.0) } else { 0.0 }
     }
 }
 
