@@ -253,11 +253,11 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
         println!("{}", serde_json::to_string_pretty(&doc).unwrap_or_default());
     } else {
         println!();
-        println!("set      images  weighted IoU  cable recall  cable precision  median ms");
+        println!("set      images  weighted IoU  cable recall  cable precision  matched IoU  median ms");
         for s in &summaries {
             println!(
-                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>9.1}",
-                s.set, s.images, s.weighted_iou, s.cable_recall, s.cable_precision, s.median_total_ms
+                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>9.1}",
+                s.set, s.images, s.weighted_iou, s.cable_recall, s.cable_precision, s.matched_iou, s.median_total_ms
             );
         }
     }

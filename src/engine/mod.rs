@@ -161,7 +161,7 @@ pub fn segment(image: &RgbImage, ends: &[[f64; 2]], params: &Params) -> Result<S
     let mut end_cables = vec![None; ends.len()];
     for choice in &chosen {
         let walk = &walks[choice.walk];
-        let Some(mut cable) = model_cable(choice, walk, &seeds, &graph, &sp, &lab, image, params) else {
+        let Some(mut cable) = model_cable(choice, walk, &walks, &seeds, &graph, &sp, &lab, image, params) else {
             continue;
         };
         cable.id = cables.len();
@@ -192,6 +192,7 @@ fn ms(t: Instant) -> f64 {
 fn model_cable(
     choice: &Pairing,
     walk: &Walk,
+    joined_walks: &[Walk],
     seeds: &[Seed],
     graph: &Graph,
     sp: &Superpixels,
@@ -203,6 +204,10 @@ fn model_cable(
     let mut points = vec![start];
     let mut weights = vec![END_WEIGHT];
     points.extend(walk.vertices[1..].iter().map(|&v| graph.vertices[v as usize].centroid));
+    if let Some(j) = choice.joined {
+        let other = &joined_walks[j];
+        points.extend(other.vertices[1..].iter().rev().map(|&v| graph.vertices[v as usize].centroid));
+    }
     weights.resize(points.len(), 1.0);
     let far_index = match choice.far {
         FarEnd::Seed(t) => {

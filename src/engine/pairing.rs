@@ -5,6 +5,10 @@
 //! times a factor for how they ended (a closing walk confirmed by a walk from the other
 //! end scores highest) and accepted greedily from the best down, so that each end
 //! belongs to at most one cable and no cable is reported twice.
+//!
+//! Two lost walks from different ends whose heads face each other across a short gap
+//! (a crossing or a glare spot they could not pass) are joined into one hypothesis
+//! between their ends.
 
 use super::Params;
 use super::walk::{Walk, WalkEnd};
@@ -29,6 +33,9 @@ pub struct Pairing {
     pub far: FarEnd,
     /// Index of the kept walk.
     pub walk: usize,
+    /// A second walk, from the far end, whose vertices continue this one in reverse
+    /// (two lost walks joined across a gap).
+    pub joined: Option<usize>,
     /// Score in 0..=1.
     pub score: f32,
 }
@@ -53,10 +60,11 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
                 WalkEnd::Border => (FarEnd::Border, params.border_factor),
                 WalkEnd::Lost => (FarEnd::Open, params.lost_factor),
             };
-            Pairing { start: w.seed, far, walk: i, score: w.quality() * factor }
+            Pairing { start: w.seed, far, walk: i, joined: None, score: w.quality() * factor }
         })
-        .filter(|h| h.score >= params.min_cable_score)
         .collect();
+    hypotheses.extend(joins(walks, params));
+    hypotheses.retain(|h| h.score >= params.min_cable_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
     let mut accepted = Vec::new();
@@ -76,12 +84,63 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
     accepted
 }
 
+/// Hypotheses joining two lost walks whose heads face each other within
+/// `join_radius_px`, each turning at most `max_turn_deg` to meet the other.
+fn joins(walks: &[Walk], params: &Params) -> Vec<Pairing> {
+    let cos_max = params.max_turn_deg.to_radians().cos();
+    let lost: Vec<(usize, &Walk)> = walks
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.end == WalkEnd::Lost && w.length_px >= params.min_cable_length_px * 0.5)
+        .collect();
+    let mut out = Vec::new();
+    for (n, &(i, a)) in lost.iter().enumerate() {
+        for &(j, b) in &lost[n + 1..] {
+            if a.seed == b.seed {
+                continue;
+            }
+            let gap = [b.end_point[0] - a.end_point[0], b.end_point[1] - a.end_point[1]];
+            let d = (gap[0] * gap[0] + gap[1] * gap[1]).sqrt();
+            if d > params.join_radius_px {
+                continue;
+            }
+            let facing = if d < 1e-3 {
+                -(a.end_heading[0] * b.end_heading[0] + a.end_heading[1] * b.end_heading[1]) >= cos_max
+            } else {
+                let (ux, uy) = (gap[0] / d, gap[1] / d);
+                a.end_heading[0] * ux + a.end_heading[1] * uy >= cos_max
+                    && -(b.end_heading[0] * ux + b.end_heading[1] * uy) >= cos_max
+            };
+            if facing {
+                out.push(Pairing {
+                    start: a.seed,
+                    far: FarEnd::Seed(b.seed),
+                    walk: i,
+                    joined: Some(j),
+                    score: (a.quality() * b.quality()).sqrt() * params.unconfirmed_factor,
+                });
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn walk(seed: usize, end: WalkEnd, q: f32) -> Walk {
-        Walk { seed, vertices: vec![0, 1], end, visual: q, smoothness: 1.0, contrast: 1.0, length_px: 100.0 }
+        Walk {
+            seed,
+            vertices: vec![0, 1],
+            end,
+            visual: q,
+            smoothness: 1.0,
+            contrast: 1.0,
+            length_px: 100.0,
+            end_heading: [1.0, 0.0],
+            end_point: [0.0, 0.0],
+        }
     }
 
     #[test]
@@ -106,6 +165,22 @@ mod tests {
         }));
         ends.sort_unstable();
         assert_eq!(ends, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn facing_lost_walks_are_joined() {
+        let p = Params::default();
+        let mut a = walk(0, WalkEnd::Lost, 0.8);
+        a.end_point = [100.0, 100.0];
+        let mut b = walk(1, WalkEnd::Lost, 0.8);
+        b.end_point = [140.0, 100.0];
+        b.end_heading = [-1.0, 0.0];
+        let got = pair(&[a.clone(), b.clone()], 2, &p);
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
+        // Heads pointing the same way do not meet.
+        b.end_heading = [1.0, 0.0];
+        assert!(pair(&[a, b], 2, &p).iter().all(|h| h.joined.is_none()));
     }
 
     #[test]

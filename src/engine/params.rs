@@ -36,6 +36,9 @@ pub struct Params {
     // --- walks ---
     /// Order d of the neighbourhood searched at every step, in graph hops (paper: 3).
     pub neighbourhood_order: u32,
+    /// Order searched when nothing acceptable lies within `neighbourhood_order` hops
+    /// (authors' code: the order grows up to 5).
+    pub jump_order: u32,
     /// Sharpness c_V of the Bradford visual likelihood (authors' code: 0.5, which barely
     /// separates colours; we use a sharper value).
     pub c_visual: f32,
@@ -73,6 +76,9 @@ pub struct Params {
     pub border_factor: f32,
     /// Score factor of a walk that lost the cable before an end or the border.
     pub lost_factor: f32,
+    /// Two lost walks whose heads face each other at most this far apart are joined
+    /// into one cable, pixels.
+    pub join_radius_px: f32,
     /// Cables scoring below this are not reported (0..1).
     pub min_cable_score: f32,
     /// Walks shorter than this are never reported as cables, pixels.
@@ -108,6 +114,7 @@ impl Default for Params {
             min_size_factor: 0.25,
             hist_bins: 4,
             neighbourhood_order: 3,
+            jump_order: 5,
             c_visual: 5.0,
             c_distance: 4.0,
             max_step_px: 100.0,
@@ -123,6 +130,7 @@ impl Default for Params {
             unconfirmed_factor: 0.8,
             border_factor: 0.9,
             lost_factor: 0.4,
+            join_radius_px: 80.0,
             min_cable_score: 0.05,
             min_cable_length_px: 30.0,
             smoothing: 1.0,
@@ -178,6 +186,7 @@ impl Params {
         check("min_size_factor", self.min_size_factor, 0.0, 1.0, "0 ..= 1")?;
         check("hist_bins", self.hist_bins as f32, 1.0, 16.0, "1 ..= 16")?;
         check("neighbourhood_order", self.neighbourhood_order as f32, 1.0, 8.0, "1 ..= 8")?;
+        check("jump_order", self.jump_order as f32, 1.0, 12.0, "1 ..= 12")?;
         check("c_visual", self.c_visual, 0.01, 1000.0, "0.01 ..= 1000")?;
         check("c_distance", self.c_distance, 0.01, 1000.0, "0.01 ..= 1000")?;
         check("max_step_px", self.max_step_px, 1.0, 1000.0, "1 ..= 1000")?;
@@ -193,6 +202,7 @@ impl Params {
         check("unconfirmed_factor", self.unconfirmed_factor, 0.0, 1.0, "0 ..= 1")?;
         check("border_factor", self.border_factor, 0.0, 1.0, "0 ..= 1")?;
         check("lost_factor", self.lost_factor, 0.0, 1.0, "0 ..= 1")?;
+        check("join_radius_px", self.join_radius_px, 0.0, 1000.0, "0 ..= 1000")?;
         check("min_cable_score", self.min_cable_score, 0.0, 1.0, "0 ..= 1")?;
         check("min_cable_length_px", self.min_cable_length_px, 0.0, 10_000.0, "0 ..= 10000")?;
         check("smoothing", self.smoothing, 0.0, 1e6, "0 ..= 1e6")?;

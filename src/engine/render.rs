@@ -86,8 +86,15 @@ pub fn cable_mask(cable: &Cable, width: u32, height: u32, mask_width_px: f32) ->
     img
 }
 
-/// Calls `set(x, y)` for every pixel whose centre is within `width / 2` of `line`
-/// (a pixel may be visited more than once).
+/// Where the centre of pixel (x, y) lies in the continuous frame of the masks: at
+/// (x + 0.5, y + 0.5), the convention the dataset's hand-drawn masks follow (they sit
+/// half a pixel up and left of their centrelines, which are in pixel-index coordinates
+/// like ours). Measured on the development split: matched-cable IoU 0.717 with 0.0,
+/// 0.755 with 0.5.
+pub const MASK_PIXEL_CENTRE: f32 = 0.5;
+
+/// Calls `set(x, y)` for every pixel whose centre (see [`MASK_PIXEL_CENTRE`]) is within
+/// `width / 2` of `line` (a pixel may be visited more than once).
 pub fn stroke(line: &[[f32; 2]], width: f32, w: u32, h: u32, mut set: impl FnMut(u32, u32)) {
     let r = (width * 0.5).max(0.5);
     let r2 = r * r;
@@ -105,7 +112,7 @@ pub fn stroke(line: &[[f32; 2]], width: f32, w: u32, h: u32, mut set: impl FnMut
         let len2 = dx * dx + dy * dy;
         for y in y0..=y1 {
             for x in x0..=x1 {
-                let (px, py) = (x as f32 - a[0], y as f32 - a[1]);
+                let (px, py) = (x as f32 + MASK_PIXEL_CENTRE - a[0], y as f32 + MASK_PIXEL_CENTRE - a[1]);
                 let t = if len2 > 0.0 { ((px * dx + py * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
                 let (ex, ey) = (px - t * dx, py - t * dy);
                 if ex * ex + ey * ey <= r2 {
@@ -219,7 +226,7 @@ mod tests {
     #[test]
     fn stroke_of_a_horizontal_line_has_the_asked_width() {
         let mut hits = vec![0u32; 40 * 20];
-        stroke(&[[5.0, 10.0], [35.0, 10.0]], 7.0, 40, 20, |x, y| hits[(y * 40 + x) as usize] = 1);
+        stroke(&[[5.0, 10.25], [35.0, 10.25]], 7.0, 40, 20, |x, y| hits[(y * 40 + x) as usize] = 1);
         let column: u32 = (0..20).map(|y| hits[y * 40 + 20]).sum();
         assert_eq!(column, 7);
         // Clipped at the frame, never out of bounds.

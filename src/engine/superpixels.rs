@@ -267,7 +267,8 @@ mod tests {
 
     #[test]
     fn connectivity_splits_and_merges() {
-        // Label 0 in two far-apart blocks, label 1 elsewhere, and a one-pixel island.
+        // Label 0 in two far-apart blocks, label 1 in two pieces (the right one of
+        // two pixels), and a one-pixel island of label 2.
         #[rustfmt::skip]
         let labels = vec![
             0, 0, 1, 1, 0, 0,
@@ -275,9 +276,10 @@ mod tests {
             1, 1, 1, 2, 1, 1,
         ];
         let (out, count) = enforce_connectivity(&labels, 6, 3, 2);
-        assert_eq!(count, 3);
+        assert_eq!(count, 4);
         assert_eq!(out[0], out[1]);
         assert_ne!(out[0], out[4]);
+        assert_ne!(out[12], out[16]);
         assert_eq!(out[15], out[14], "the island merged into its neighbour");
     }
 

@@ -17,9 +17,9 @@ pub fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
     if union == 0 { 1.0 } else { inter as f64 / union as f64 }
 }
 
-/// Number of one-to-one matches between `found` and `truth` masks with IoU ≥
-/// `min_iou`, chosen greedily from the best pair down.
-pub fn match_cables(found: &[GrayImage], truth: &[GrayImage], min_iou: f64) -> usize {
+/// One-to-one matches between `found` and `truth` masks with IoU ≥ `min_iou`, chosen
+/// greedily from the best pair down: their number and the sum of their IoUs.
+pub fn match_cables(found: &[GrayImage], truth: &[GrayImage], min_iou: f64) -> (usize, f64) {
     let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
     for (i, f) in found.iter().enumerate() {
         for (j, t) in truth.iter().enumerate() {
@@ -31,15 +31,16 @@ pub fn match_cables(found: &[GrayImage], truth: &[GrayImage], min_iou: f64) -> u
     }
     pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
     let (mut used_f, mut used_t) = (vec![false; found.len()], vec![false; truth.len()]);
-    let mut matched = 0;
-    for (_, i, j) in pairs {
+    let (mut matched, mut sum) = (0, 0.0);
+    for (v, i, j) in pairs {
         if !used_f[i] && !used_t[j] {
             used_f[i] = true;
             used_t[j] = true;
             matched += 1;
+            sum += v;
         }
     }
-    matched
+    (matched, sum)
 }
 
 /// Totals over one set of images.
@@ -55,6 +56,8 @@ pub struct SetSummary {
     pub cable_recall: f64,
     /// Matched / found cables.
     pub cable_precision: f64,
+    /// Mean IoU of the matched cables (alignment of the curves that were found).
+    pub matched_iou: f64,
     /// Median total milliseconds per image.
     pub median_total_ms: f64,
 }
@@ -73,6 +76,7 @@ pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
             let cables: usize = rs.iter().map(|r| r.gt_cables).sum();
             let found: usize = rs.iter().map(|r| r.found_cables).sum();
             let matched: usize = rs.iter().map(|r| r.matched_cables).sum();
+            let matched_iou: f64 = rs.iter().map(|r| r.matched_iou_sum).sum::<f64>() / matched.max(1) as f64;
             let weighted: f64 = rs.iter().map(|r| r.gt_cables as f64 * r.iou).sum();
             let mut totals: Vec<f64> = rs.iter().map(|r| r.timings_ms.total).collect();
             totals.sort_by(f64::total_cmp);
@@ -81,6 +85,7 @@ pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
                 weighted_iou: weighted / cables.max(1) as f64,
                 cable_recall: matched as f64 / cables.max(1) as f64,
                 cable_precision: matched as f64 / found.max(1) as f64,
+                matched_iou,
                 median_total_ms: totals.get(totals.len() / 2).copied().unwrap_or(0.0),
                 set,
             }
@@ -103,7 +108,7 @@ mod tests {
         assert_eq!(iou(&rect(0, 0), &rect(0, 0)), 1.0);
         let found = [rect(0, 4), rect(5, 9)];
         let truth = [rect(0, 5), rect(6, 9), rect(0, 2)];
-        assert_eq!(match_cables(&found, &truth, 0.5), 2);
-        assert_eq!(match_cables(&found, &truth, 0.9), 0);
+        assert_eq!(match_cables(&found, &truth, 0.5).0, 2);
+        assert_eq!(match_cables(&found, &truth, 0.9), (0, 0.0));
     }
 }
