@@ -26,6 +26,10 @@ pub enum Command {
     Segment(SegmentArgs),
     /// Evaluate on a folder laid out like the cables dataset.
     Eval(EvalArgs),
+    /// Run the HTTP service.
+    Serve(crate::http::ServeArgs),
+    /// Print the OpenAPI document generated from the code.
+    Openapi,
 }
 
 /// Mask kinds on the command line.
@@ -128,6 +132,9 @@ pub enum CliError {
     /// The dataset.
     #[error(transparent)]
     Dataset(#[from] DatasetError),
+    /// The service.
+    #[error("{0}")]
+    Serve(String),
     /// Files.
     #[error("{0}: {1}")]
     Io(PathBuf, std::io::Error),
@@ -138,6 +145,12 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Segment(args) => segment(&args),
         Command::Eval(args) => evaluate(&args),
+        Command::Serve(args) => crate::http::run(args).map_err(CliError::Serve),
+        Command::Openapi => {
+            let text = crate::http::openapi().to_pretty_json().map_err(|e| CliError::Serve(e.to_string()))?;
+            println!("{text}");
+            Ok(())
+        }
     }
 }
 

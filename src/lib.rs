@@ -4,6 +4,7 @@
 //!
 //! - [`decode`]: image decoding with header-checked limits;
 //! - [`engine`]: the pure algorithm (SLIC → graph → walks → pairing → splines → masks);
+//! - [`http`]: the HTTP service (axum) around the engine;
 //! - [`eval`]: dataset reading and the paper's metrics;
 //! - [`synth`]: deterministic synthetic cable scenes with known truth;
 //! - [`report`]: the JSON document shared by the command line and the service.
@@ -12,5 +13,6 @@ pub mod cli;
 pub mod decode;
 pub mod engine;
 pub mod eval;
+pub mod http;
 pub mod report;
 pub mod synth;

@@ -118,7 +118,7 @@ impl Default for Params {
             c_visual: 5.0,
             c_distance: 4.0,
             max_step_px: 100.0,
-            kappa: 4.0,
+            kappa: 2.0,
             max_turn_deg: 60.0,
             heading_span_px: 25.0,
             close_radius_px: 20.0,

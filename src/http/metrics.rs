@@ -1,0 +1,69 @@
+//! Prometheus metrics: names, buckets and recording helpers.
+//!
+//! Labels come only from bounded sets: route templates, status classes, preset names
+//! known at start-up, stage names and rejection reasons.
+
+use std::sync::OnceLock;
+
+use metrics_exporter_prometheus::{Matcher, PrometheusBuilder, PrometheusHandle};
+
+/// Requests answered, by route, status class and preset.
+pub const REQUESTS: &str = "ariadne_requests_total";
+/// End-to-end latency, seconds, by route and status class.
+pub const REQUEST_SECONDS: &str = "ariadne_request_duration_seconds";
+/// Per-stage latency, seconds, by stage.
+pub const STAGE_SECONDS: &str = "ariadne_stage_duration_seconds";
+/// Requests waiting for a worker.
+pub const QUEUE_DEPTH: &str = "ariadne_queue_depth";
+/// Requests being worked on.
+pub const IN_FLIGHT: &str = "ariadne_in_flight";
+/// Requests refused, by reason.
+pub const REJECTIONS: &str = "ariadne_rejections_total";
+/// Cables found per image.
+pub const CABLES: &str = "ariadne_cables_per_image";
+
+/// Latency buckets, seconds: 5 ms to 30 s.
+const SECONDS_BUCKETS: [f64; 14] = [0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0];
+/// Cable-count buckets.
+const CABLE_BUCKETS: [f64; 9] = [0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 20.0];
+
+/// The process-wide recorder, installed on first use (several servers in one test
+/// process share it, so tests compare before and after).
+pub fn handle() -> &'static PrometheusHandle {
+    static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
+    HANDLE.get_or_init(|| {
+        let builder = PrometheusBuilder::new()
+            .set_buckets_for_metric(Matcher::Suffix("_seconds".into()), &SECONDS_BUCKETS)
+            .and_then(|b| b.set_buckets_for_metric(Matcher::Full(CABLES.into()), &CABLE_BUCKETS))
+            .expect("bucket lists are non-empty constants");
+        let recorder = builder.build_recorder();
+        let handle = recorder.handle();
+        // Another recorder may already be installed (a library user's): then ours
+        // still renders what is recorded through it... which is nothing; say so.
+        if metrics::set_global_recorder(recorder).is_err() {
+            tracing::warn!("a metrics recorder was already installed; /metrics will be empty");
+        }
+        handle
+    })
+}
+
+/// Status class label of a status code: `2xx`, `4xx`, ...
+pub fn status_class(status: u16) -> &'static str {
+    match status {
+        100..=199 => "1xx",
+        200..=299 => "2xx",
+        300..=399 => "3xx",
+        400..=499 => "4xx",
+        _ => "5xx",
+    }
+}
+
+/// Records one stage's duration.
+pub fn stage(name: &'static str, ms: f64) {
+    metrics::histogram!(STAGE_SECONDS, "stage" => name).record(ms / 1e3);
+}
+
+/// Records a rejection.
+pub fn reject(reason: &'static str) {
+    metrics::counter!(REJECTIONS, "reason" => reason).increment(1);
+}
