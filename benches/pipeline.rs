@@ -1,1 +1,111 @@
-fn main() {}
+//! Benchmarks on real dataset images (640x480): each stage alone and the whole
+//! `segment` path from JPEG bytes to the mask PNG, single-threaded.
+//!
+//! Run: `cargo bench --bench pipeline` (reads the dataset from `$ARIADNE_DATASET`,
+//! default `../shared/datasets/cables`).
+
+#![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
+
+use ariadne_dlo::engine::color::LabImage;
+use ariadne_dlo::engine::graph::Graph;
+use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
+use ariadne_dlo::engine::{self, Params, render};
+use ariadne_dlo::{decode, eval, report};
+
+fn main() {
+    divan::main();
+}
+
+struct Fixture {
+    jpeg: Vec<u8>,
+    image: image::RgbImage,
+    ends: Vec<[f64; 2]>,
+}
+
+fn fixtures() -> Vec<Fixture> {
+    let samples =
+        eval::load_dataset(&eval::default_dataset_dir()).expect("dataset (set ARIADNE_DATASET)");
+    samples
+        .iter()
+        .filter(|s| s.set == "simple")
+        .step_by(8)
+        .map(|s| {
+            let jpeg = std::fs::read(&s.image).expect("readable image");
+            let image = decode::decode_rgb(&jpeg, u64::MAX).expect("decodable image");
+            let ends = eval::terminal_ends(&s.cables, image.width(), image.height());
+            Fixture { jpeg, image, ends }
+        })
+        .collect()
+}
+
+fn settings(p: &Params) -> SlicSettings {
+    SlicSettings {
+        n_segments: p.n_segments,
+        compactness: p.compactness,
+        iterations: p.slic_iterations,
+        min_size_factor: p.min_size_factor,
+    }
+}
+
+/// Decode → engine → binary mask → PNG, as `ariadne segment` and the service do.
+#[divan::bench(sample_count = 30)]
+fn segment_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let mut i = 0;
+    bencher.bench_local(|| {
+        let f = &fx[i % fx.len()];
+        i += 1;
+        let image = decode::decode_rgb(&f.jpeg, u64::MAX).unwrap();
+        let seg = engine::segment(&image, &f.ends, &p).unwrap();
+        report::mask_png(&render::render_mask(
+            &seg,
+            engine::MaskKind::Binary,
+            p.mask_width_px,
+        ))
+    });
+}
+
+#[divan::bench(sample_count = 30)]
+fn decode_jpeg_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    bencher.bench_local(|| decode::decode_rgb(&fx[0].jpeg, u64::MAX).unwrap());
+}
+
+/// Lab conversion, blur and SLIC.
+#[divan::bench(sample_count = 30)]
+fn superpixels_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    bencher.bench_local(|| {
+        let img = &fx[0].image;
+        let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
+        lab.gaussian_blur(p.sigma);
+        slic(&lab, &settings(&p))
+    });
+}
+
+#[divan::bench(sample_count = 30)]
+fn graph_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let img = &fx[0].image;
+    let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
+    lab.gaussian_blur(p.sigma);
+    let sp = slic(&lab, &settings(&p));
+    bencher.bench_local(|| Graph::build(&sp, img.as_raw(), &lab, p.hist_bins));
+}
+
+#[divan::bench(sample_count = 30)]
+fn mask_and_png_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let seg = engine::segment(&fx[0].image, &fx[0].ends, &p).unwrap();
+    bencher.bench_local(|| {
+        report::mask_png(&render::render_mask(
+            &seg,
+            engine::MaskKind::Binary,
+            p.mask_width_px,
+        ))
+    });
+}

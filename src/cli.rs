@@ -118,7 +118,9 @@ pub enum CliError {
     #[error("--endpoints must be a JSON array of [x, y] pairs: {0}")]
     BadEndpoints(String),
     /// No ends and no detector yet.
-    #[error("cable ends are required: pass --endpoints '[[x,y],...]' (automatic detection is not available yet)")]
+    #[error(
+        "cable ends are required: pass --endpoints '[[x,y],...]' (automatic detection is not available yet)"
+    )]
     EndsRequired,
     /// Bad --options.
     #[error("--options must be a JSON object of parameter overrides: {0}")]
@@ -147,7 +149,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Eval(args) => evaluate(&args),
         Command::Serve(args) => crate::http::run(args).map_err(CliError::Serve),
         Command::Openapi => {
-            let text = crate::http::openapi().to_pretty_json().map_err(|e| CliError::Serve(e.to_string()))?;
+            let text = crate::http::openapi()
+                .to_pretty_json()
+                .map_err(|e| CliError::Serve(e.to_string()))?;
             println!("{text}");
             Ok(())
         }
@@ -174,7 +178,9 @@ fn params_from(preset: &str, options: Option<&str>) -> Result<Params, CliError> 
 fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     if path == Path::new("-") {
         use std::io::Write;
-        return std::io::stdout().write_all(bytes).map_err(|e| CliError::Io(path.into(), e));
+        return std::io::stdout()
+            .write_all(bytes)
+            .map_err(|e| CliError::Io(path.into(), e));
     }
     std::fs::write(path, bytes).map_err(|e| CliError::Io(path.into(), e))
 }
@@ -197,7 +203,14 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
     let mask_time = t.elapsed().as_secs_f64() * 1e3;
     let t = std::time::Instant::now();
     let mask_png = report::mask_png(&mask);
-    let overlay_png = overlay.map(|o| report::png(o.as_raw(), o.width(), o.height(), image::ExtendedColorType::Rgb8));
+    let overlay_png = overlay.map(|o| {
+        report::png(
+            o.as_raw(),
+            o.width(),
+            o.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+    });
     if let Some(path) = &args.mask {
         write(path, &mask_png)?;
     }
@@ -213,11 +226,17 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
             endpoints: report::endpoint_reports(&seg, &ends, &[]),
             mask_png: report::base64(&mask_png),
             overlay_png: overlay_png.as_deref().map(report::base64),
-            timings_ms: Timings { decode, mask: mask_time, ..Timings::default() }.with_engine(&seg),
+            timings_ms: Timings {
+                decode,
+                mask: mask_time,
+                ..Timings::default()
+            }
+            .with_engine(&seg),
         };
         response.timings_ms.encode = t.elapsed().as_secs_f64() * 1e3;
         response.timings_ms.total = start.elapsed().as_secs_f64() * 1e3;
-        let mut text = serde_json::to_vec_pretty(&response).map_err(|e| CliError::BadOptions(e.to_string()))?;
+        let mut text = serde_json::to_vec_pretty(&response)
+            .map_err(|e| CliError::BadOptions(e.to_string()))?;
         text.push(b'\n');
         write(path, &text)?;
     }
@@ -231,7 +250,10 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
 }
 
 fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
-    let dir = args.dataset.clone().unwrap_or_else(eval::default_dataset_dir);
+    let dir = args
+        .dataset
+        .clone()
+        .unwrap_or_else(eval::default_dataset_dir);
     let samples = eval::load_dataset(&dir)?;
     let simple = params_from(&args.preset, args.options.as_deref())?;
     let hard = params_from(&args.hard_preset, args.options.as_deref())?;
@@ -266,11 +288,19 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
         println!("{}", serde_json::to_string_pretty(&doc).unwrap_or_default());
     } else {
         println!();
-        println!("set      images  weighted IoU  cable recall  cable precision  matched IoU  median ms");
+        println!(
+            "set      images  weighted IoU  cable recall  cable precision  matched IoU  median ms"
+        );
         for s in &summaries {
             println!(
                 "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>9.1}",
-                s.set, s.images, s.weighted_iou, s.cable_recall, s.cable_precision, s.matched_iou, s.median_total_ms
+                s.set,
+                s.images,
+                s.weighted_iou,
+                s.cable_recall,
+                s.cable_precision,
+                s.matched_iou,
+                s.median_total_ms
             );
         }
     }

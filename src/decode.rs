@@ -52,7 +52,8 @@ pub fn sniff(bytes: &[u8]) -> Result<ImageFormat, DecodeError> {
 pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), DecodeError> {
     let format = sniff(bytes)?;
     if format == ImageFormat::Png && bytes.len() >= 24 && &bytes[12..16] == b"IHDR" {
-        let be = |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+        let be =
+            |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
         return Ok((be(16), be(20)));
     }
     ImageReader::with_format(Cursor::new(bytes), format)
@@ -68,17 +69,26 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     let (width, height) = dimensions(bytes)?;
     let pixels = width as u64 * height as u64;
     if pixels > max_pixels {
-        return Err(DecodeError::TooManyPixels { width, height, pixels, limit: max_pixels });
+        return Err(DecodeError::TooManyPixels {
+            width,
+            height,
+            pixels,
+            limit: max_pixels,
+        });
     }
     if format == ImageFormat::Jpeg && !has_jpeg_end(bytes) {
-        return Err(DecodeError::Corrupt("truncated JPEG (no end-of-image marker)".into()));
+        return Err(DecodeError::Corrupt(
+            "truncated JPEG (no end-of-image marker)".into(),
+        ));
     }
     let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(width);
     limits.max_image_height = Some(height);
     reader.limits(limits);
-    let img = reader.decode().map_err(|e| DecodeError::Corrupt(e.to_string()))?;
+    let img = reader
+        .decode()
+        .map_err(|e| DecodeError::Corrupt(e.to_string()))?;
     Ok(img.into_rgb8())
 }
 
@@ -93,7 +103,12 @@ mod tests {
     use super::*;
 
     fn png_bytes(w: u32, h: u32) -> Vec<u8> {
-        crate::report::png(&vec![7u8; (w * h * 3) as usize], w, h, image::ExtendedColorType::Rgb8)
+        crate::report::png(
+            &vec![7u8; (w * h * 3) as usize],
+            w,
+            h,
+            image::ExtendedColorType::Rgb8,
+        )
     }
 
     #[test]
@@ -101,11 +116,23 @@ mod tests {
         let img = decode_rgb(&png_bytes(20, 10), 1000).unwrap();
         assert_eq!(img.dimensions(), (20, 10));
         assert_eq!(decode_rgb(&[], 10), Err(DecodeError::Empty));
-        assert_eq!(decode_rgb(b"hello world", 10), Err(DecodeError::Unrecognised));
-        assert!(matches!(decode_rgb(b"GIF89a......", 10), Err(DecodeError::Unsupported(_))));
-        assert!(matches!(decode_rgb(&png_bytes(20, 10), 100), Err(DecodeError::TooManyPixels { pixels: 200, .. })));
+        assert_eq!(
+            decode_rgb(b"hello world", 10),
+            Err(DecodeError::Unrecognised)
+        );
+        assert!(matches!(
+            decode_rgb(b"GIF89a......", 10),
+            Err(DecodeError::Unsupported(_))
+        ));
+        assert!(matches!(
+            decode_rgb(&png_bytes(20, 10), 100),
+            Err(DecodeError::TooManyPixels { pixels: 200, .. })
+        ));
         let bytes = png_bytes(20, 10);
-        assert!(matches!(decode_rgb(&bytes[..bytes.len() / 2], 1000), Err(DecodeError::Corrupt(_))));
+        assert!(matches!(
+            decode_rgb(&bytes[..bytes.len() / 2], 1000),
+            Err(DecodeError::Corrupt(_))
+        ));
     }
 
     fn crc32(data: &[u8]) -> u32 {
@@ -113,7 +140,11 @@ mod tests {
         for &b in data {
             crc ^= b as u32;
             for _ in 0..8 {
-                crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+                crc = if crc & 1 == 1 {
+                    (crc >> 1) ^ 0xEDB8_8320
+                } else {
+                    crc >> 1
+                };
             }
         }
         !crc
@@ -129,6 +160,9 @@ mod tests {
         let crc = crc32(&bytes[12..29]);
         bytes[29..33].copy_from_slice(&crc.to_be_bytes());
         assert_eq!(dimensions(&bytes).unwrap(), (60000, 60000));
-        assert!(matches!(decode_rgb(&bytes, 1 << 24), Err(DecodeError::TooManyPixels { .. })));
+        assert!(matches!(
+            decode_rgb(&bytes, 1 << 24),
+            Err(DecodeError::TooManyPixels { .. })
+        ));
     }
 }

@@ -129,7 +129,11 @@ impl From<&Cable> for CableReport {
 }
 
 /// Reports every end of `ends` with its confidence and the cable `seg` assigned it to.
-pub fn endpoint_reports(seg: &Segmentation, ends: &[[f64; 2]], confidences: &[f32]) -> Vec<EndpointReport> {
+pub fn endpoint_reports(
+    seg: &Segmentation,
+    ends: &[[f64; 2]],
+    confidences: &[f32],
+) -> Vec<EndpointReport> {
     ends.iter()
         .enumerate()
         .map(|(i, &point)| EndpointReport {
@@ -143,8 +147,18 @@ pub fn endpoint_reports(seg: &Segmentation, ends: &[[f64; 2]], confidences: &[f3
 /// Encodes a mask as PNG bytes.
 pub fn mask_png(mask: &Mask) -> Vec<u8> {
     match mask {
-        Mask::Gray(img) => png(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::L8),
-        Mask::Rgb(img) => png(img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8),
+        Mask::Gray(img) => png(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::L8,
+        ),
+        Mask::Rgb(img) => png(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        ),
     }
 }
 

@@ -125,12 +125,20 @@ pub fn scene(spec: &SceneSpec) -> Scene {
         });
         cables.push(SynthCable { centreline, color });
     }
-    Scene { image, cables, mask }
+    Scene {
+        image,
+        cables,
+        mask,
+    }
 }
 
 fn background(spec: &SceneSpec, rng: &mut Rng) -> RgbImage {
     let (w, h) = (spec.width, spec.height);
-    let base = [rng.range(200.0, 250.0), rng.range(200.0, 250.0), rng.range(190.0, 240.0)];
+    let base = [
+        rng.range(200.0, 250.0),
+        rng.range(200.0, 250.0),
+        rng.range(190.0, 240.0),
+    ];
     let mut img = RgbImage::from_fn(w, h, |_, _| {
         let n = rng.range(-6.0, 6.0);
         Rgb(base.map(|c| (c + n).clamp(0.0, 255.0) as u8))
@@ -138,32 +146,54 @@ fn background(spec: &SceneSpec, rng: &mut Rng) -> RgbImage {
     if spec.background == Background::Textured {
         let strokes = (w * h / 2500) as usize;
         for _ in 0..strokes {
-            let colour = [rng.range(60.0, 250.0), rng.range(60.0, 250.0), rng.range(60.0, 250.0)].map(|c| c as u8);
+            let colour = [
+                rng.range(60.0, 250.0),
+                rng.range(60.0, 250.0),
+                rng.range(60.0, 250.0),
+            ]
+            .map(|c| c as u8);
             let a = [rng.range(0.0, w as f32), rng.range(0.0, h as f32)];
             let b = [a[0] + rng.range(-40.0, 40.0), a[1] + rng.range(-40.0, 40.0)];
             let width = rng.range(1.0, 3.0);
-            stroke(&[a, b], width, w, h, |x, y| img.put_pixel(x, y, Rgb(colour)));
+            stroke(&[a, b], width, w, h, |x, y| {
+                img.put_pixel(x, y, Rgb(colour))
+            });
         }
     }
     img
 }
 
 /// A smooth random curve fully inside the frame (with a margin), 1 px steps: heading
-/// driven by a few low-frequency sines.
+/// driven by a few low-frequency sines. Curves that leave the frame are drawn again,
+/// shorter after every hundred failures, so small frames terminate too.
 fn random_curve(rng: &mut Rng, w: f32, h: f32) -> Vec<[f32; 2]> {
-    let margin = 25.0;
-    loop {
-        let len = rng.range(0.35, 0.8) * w.min(h) * 1.4;
+    let margin = (w.min(h) / 6.0).min(25.0);
+    let mut scale = 1.0f32;
+    for attempt in 1.. {
+        if attempt % 100 == 0 {
+            scale *= 0.8;
+        }
+        let len = (rng.range(0.35, 0.8) * w.min(h) * 1.4 * scale).max(4.0);
         let mut p = [rng.range(margin, w - margin), rng.range(margin, h - margin)];
         let theta0 = rng.range(0.0, std::f32::consts::TAU);
         let waves: Vec<(f32, f32, f32)> = (0..3)
-            .map(|k| (rng.range(-0.8, 0.8) / (k + 1) as f32, rng.range(0.5, 2.0) * (k + 1) as f32, rng.range(0.0, 6.3)))
+            .map(|k| {
+                (
+                    rng.range(-0.8, 0.8) / (k + 1) as f32,
+                    rng.range(0.5, 2.0) * (k + 1) as f32,
+                    rng.range(0.0, 6.3),
+                )
+            })
             .collect();
         let mut pts = vec![p];
         let mut ok = true;
         for i in 1..len as usize {
             let s = i as f32 / len;
-            let theta = theta0 + waves.iter().map(|(a, f, ph)| a * (f * s * std::f32::consts::PI + ph).sin()).sum::<f32>();
+            let theta = theta0
+                + waves
+                    .iter()
+                    .map(|(a, f, ph)| a * (f * s * std::f32::consts::PI + ph).sin())
+                    .sum::<f32>();
             p = [p[0] + theta.cos(), p[1] + theta.sin()];
             if p[0] < margin || p[1] < margin || p[0] > w - margin || p[1] > h - margin {
                 ok = false;
@@ -175,6 +205,7 @@ fn random_curve(rng: &mut Rng, w: f32, h: f32) -> Vec<[f32; 2]> {
             return pts;
         }
     }
+    unreachable!("the attempt loop only ends by returning")
 }
 
 #[cfg(test)]
@@ -183,7 +214,14 @@ mod tests {
 
     #[test]
     fn scenes_are_deterministic_and_consistent() {
-        let spec = SceneSpec { width: 200, height: 150, cables: 3, cable_width: 9.0, background: Background::Textured, seed: 7 };
+        let spec = SceneSpec {
+            width: 200,
+            height: 150,
+            cables: 3,
+            cable_width: 9.0,
+            background: Background::Textured,
+            seed: 7,
+        };
         let (a, b) = (scene(&spec), scene(&spec));
         assert_eq!(a.image, b.image);
         assert_eq!(a.cables.len(), 3);

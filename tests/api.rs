@@ -1,5 +1,7 @@
 //! Integration tests: the real server on 127.0.0.1:0, spoken to over HTTP.
 
+#![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
+
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -52,7 +54,12 @@ async fn spawn_app_with(flags: &[&str], warm: bool) -> TestApp {
     let server = tokio::spawn(http::serve(listener, state, async move {
         let _ = rx.await;
     }));
-    TestApp { base: format!("http://{addr}"), client: reqwest::Client::new(), shutdown: Some(tx), server }
+    TestApp {
+        base: format!("http://{addr}"),
+        client: reqwest::Client::new(),
+        shutdown: Some(tx),
+        server,
+    }
 }
 
 async fn spawn_app(flags: &[&str]) -> TestApp {
@@ -70,12 +77,21 @@ fn photo() -> Vec<u8> {
 /// The true terminals of simple/00000, as the JSON the API takes.
 fn ends_json() -> String {
     let samples = ariadne_dlo::eval::load_dataset(&dataset()).unwrap();
-    let s = samples.iter().find(|s| s.set == "simple" && s.name == "00000").unwrap();
+    let s = samples
+        .iter()
+        .find(|s| s.set == "simple" && s.name == "00000")
+        .unwrap();
     serde_json::to_string(&ariadne_dlo::eval::terminal_ends(&s.cables, 640, 480)).unwrap()
 }
 
 fn form(image: Vec<u8>, ends: Option<String>) -> Form {
-    let mut f = Form::new().part("image", Part::bytes(image).file_name("photo.jpg").mime_str("image/jpeg").unwrap());
+    let mut f = Form::new().part(
+        "image",
+        Part::bytes(image)
+            .file_name("photo.jpg")
+            .mime_str("image/jpeg")
+            .unwrap(),
+    );
     if let Some(e) = ends {
         f = f.text("endpoints", e);
     }
@@ -89,15 +105,25 @@ fn png_dimensions(bytes: &[u8]) -> (u32, u32) {
 
 fn b64(text: &str) -> Vec<u8> {
     use base64::Engine as _;
-    base64::engine::general_purpose::STANDARD.decode(text).unwrap()
+    base64::engine::general_purpose::STANDARD
+        .decode(text)
+        .unwrap()
 }
 
 async fn expect_error(response: reqwest::Response, status: u16, code: &str) -> Value {
     assert_eq!(response.status().as_u16(), status, "wrong status");
-    assert!(response.headers()["content-type"].to_str().unwrap().starts_with("application/json"));
+    assert!(
+        response.headers()["content-type"]
+            .to_str()
+            .unwrap()
+            .starts_with("application/json")
+    );
     let body: Value = response.json().await.unwrap();
     assert_eq!(body["error"]["code"], code, "{body}");
-    assert!(body["error"]["message"].as_str().unwrap().len() > 10, "{body}");
+    assert!(
+        body["error"]["message"].as_str().unwrap().len() > 10,
+        "{body}"
+    );
     body
 }
 
@@ -116,7 +142,10 @@ async fn multipart_json_happy_path() {
     assert_eq!(response.headers()["x-request-id"], "cell-7-frame-42");
     let body: Value = response.json().await.unwrap();
     assert_eq!(body["request_id"], "cell-7-frame-42");
-    assert_eq!((body["width"].as_u64(), body["height"].as_u64()), (Some(640), Some(480)));
+    assert_eq!(
+        (body["width"].as_u64(), body["height"].as_u64()),
+        (Some(640), Some(480))
+    );
     let cables = body["cables"].as_array().unwrap();
     assert!(cables.len() >= 5, "{} cables", cables.len());
     for c in cables {
@@ -124,21 +153,50 @@ async fn multipart_json_happy_path() {
         assert!(poly.len() > 10);
         assert_eq!(c["spline"]["degree"], 3);
         let k = c["spline"]["knots"].as_array().unwrap().len();
-        assert_eq!(k, c["spline"]["control_points"].as_array().unwrap().len() + 4);
+        assert_eq!(
+            k,
+            c["spline"]["control_points"].as_array().unwrap().len() + 4
+        );
         assert!(c["color"].as_str().unwrap().starts_with('#'));
         let score = c["score"].as_f64().unwrap();
         assert!((0.0..=1.0).contains(&score));
     }
     let ends = body["endpoints"].as_array().unwrap();
     assert_eq!(ends.len(), 9);
-    assert!(ends.iter().all(|e| e["confidence"] == 1.0 && e["point"].as_array().unwrap().len() == 2));
+    assert!(
+        ends.iter()
+            .all(|e| e["confidence"] == 1.0 && e["point"].as_array().unwrap().len() == 2)
+    );
     assert!(ends.iter().filter(|e| e["cable"].is_u64()).count() >= 5);
-    assert_eq!(png_dimensions(&b64(body["mask_png"].as_str().unwrap())), (640, 480));
-    assert_eq!(png_dimensions(&b64(body["overlay_png"].as_str().unwrap())), (640, 480));
-    for stage in ["queue", "decode", "endpoints", "superpixels", "graph", "walks", "splines", "mask", "encode", "total"] {
-        assert!(body["timings_ms"][stage].as_f64().unwrap() >= 0.0, "{stage}");
+    assert_eq!(
+        png_dimensions(&b64(body["mask_png"].as_str().unwrap())),
+        (640, 480)
+    );
+    assert_eq!(
+        png_dimensions(&b64(body["overlay_png"].as_str().unwrap())),
+        (640, 480)
+    );
+    for stage in [
+        "queue",
+        "decode",
+        "endpoints",
+        "superpixels",
+        "graph",
+        "walks",
+        "splines",
+        "mask",
+        "encode",
+        "total",
+    ] {
+        assert!(
+            body["timings_ms"][stage].as_f64().unwrap() >= 0.0,
+            "{stage}"
+        );
     }
-    assert!(body["timings_ms"]["total"].as_f64().unwrap() >= body["timings_ms"]["superpixels"].as_f64().unwrap());
+    assert!(
+        body["timings_ms"]["total"].as_f64().unwrap()
+            >= body["timings_ms"]["superpixels"].as_f64().unwrap()
+    );
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -161,16 +219,28 @@ async fn raw_body_png_format_and_mask_kinds() {
     let png = raw(format!("{q}&format=png")).await.unwrap();
     assert_eq!(png.status(), 200);
     assert_eq!(png.headers()["content-type"], "image/png");
-    let mask = image::load_from_memory(&png.bytes().await.unwrap()).unwrap().into_luma8();
+    let mask = image::load_from_memory(&png.bytes().await.unwrap())
+        .unwrap()
+        .into_luma8();
     assert_eq!(mask.dimensions(), (640, 480));
     assert!(mask.pixels().all(|p| p.0[0] == 0 || p.0[0] == 255));
 
-    let labels = raw(format!("{q}&format=png&mask=labels")).await.unwrap().bytes().await.unwrap();
+    let labels = raw(format!("{q}&format=png&mask=labels"))
+        .await
+        .unwrap()
+        .bytes()
+        .await
+        .unwrap();
     let labels = image::load_from_memory(&labels).unwrap().into_luma8();
     let max = labels.pixels().map(|p| p.0[0]).max().unwrap();
     assert_eq!(max as usize, n, "label values run 1..=cables");
 
-    let color = raw(format!("{q}&format=png&mask=color")).await.unwrap().bytes().await.unwrap();
+    let color = raw(format!("{q}&format=png&mask=color"))
+        .await
+        .unwrap()
+        .bytes()
+        .await
+        .unwrap();
     let color = image::load_from_memory(&color).unwrap();
     assert_eq!(color.color(), image::ColorType::Rgb8);
 }
@@ -184,56 +254,195 @@ async fn bad_inputs_get_precise_json_errors_and_the_server_stays_up() {
 
     // No image part.
     let f = Form::new().text("endpoints", ends.clone());
-    expect_error(post("").multipart(f).send().await.unwrap(), 400, "missing_image").await;
+    expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        400,
+        "missing_image",
+    )
+    .await;
     // Empty raw body.
-    expect_error(post("").header("content-type", "image/jpeg").send().await.unwrap(), 400, "empty_image").await;
+    expect_error(
+        post("")
+            .header("content-type", "image/jpeg")
+            .send()
+            .await
+            .unwrap(),
+        400,
+        "empty_image",
+    )
+    .await;
     // Garbage declared as JPEG.
-    let q = format!("?{}", serde_urlencoded::to_string([("endpoints", ends.as_str())]).unwrap());
+    let q = format!(
+        "?{}",
+        serde_urlencoded::to_string([("endpoints", ends.as_str())]).unwrap()
+    );
     let garbage: Vec<u8> = (0..5000u32).map(|i| (i * 7919 % 251) as u8).collect();
-    expect_error(post(&q).header("content-type", "image/jpeg").body(garbage).send().await.unwrap(), 422, "undecodable_image").await;
+    expect_error(
+        post(&q)
+            .header("content-type", "image/jpeg")
+            .body(garbage)
+            .send()
+            .await
+            .unwrap(),
+        422,
+        "undecodable_image",
+    )
+    .await;
     // Truncated JPEG.
     let mut half = photo();
     half.truncate(half.len() / 2);
-    expect_error(post(&q).header("content-type", "image/jpeg").body(half).send().await.unwrap(), 422, "undecodable_image").await;
+    expect_error(
+        post(&q)
+            .header("content-type", "image/jpeg")
+            .body(half)
+            .send()
+            .await
+            .unwrap(),
+        422,
+        "undecodable_image",
+    )
+    .await;
     // Unsupported types: a text body, a GIF in a form.
-    expect_error(post(&q).header("content-type", "text/plain").body("hello").send().await.unwrap(), 415, "unsupported_media_type").await;
+    expect_error(
+        post(&q)
+            .header("content-type", "text/plain")
+            .body("hello")
+            .send()
+            .await
+            .unwrap(),
+        415,
+        "unsupported_media_type",
+    )
+    .await;
     let gif = b"GIF89a\x01\x00\x01\x00\x80\x00\x00\x00\x00\x00\xff\xff\xff!\xf9\x04\x01\x00\x00\x00\x00,\x00\x00\x00\x00\x01\x00\x01\x00\x00\x02\x02D\x01\x00;".to_vec();
-    expect_error(post("").multipart(form(gif, Some(ends.clone()))).send().await.unwrap(), 415, "unsupported_media_type").await;
+    expect_error(
+        post("")
+            .multipart(form(gif, Some(ends.clone())))
+            .send()
+            .await
+            .unwrap(),
+        415,
+        "unsupported_media_type",
+    )
+    .await;
     // Pixel bomb: a valid PNG header announcing 60000 x 60000.
     let bomb = pixel_bomb();
-    expect_error(post(&q).header("content-type", "image/png").body(bomb).send().await.unwrap(), 413, "too_many_pixels").await;
+    expect_error(
+        post(&q)
+            .header("content-type", "image/png")
+            .body(bomb)
+            .send()
+            .await
+            .unwrap(),
+        413,
+        "too_many_pixels",
+    )
+    .await;
     // Body over the limit.
     // Just over the limit, so the whole body fits the socket buffers and the client
     // reads the early answer instead of failing on a closed connection.
     let big = vec![0u8; 1_000_500];
-    expect_error(post(&q).header("content-type", "image/jpeg").body(big).send().await.unwrap(), 413, "body_too_large").await;
+    expect_error(
+        post(&q)
+            .header("content-type", "image/jpeg")
+            .body(big)
+            .send()
+            .await
+            .unwrap(),
+        413,
+        "body_too_large",
+    )
+    .await;
     // Malformed ends, ends outside, no ends.
     let f = form(photo(), Some("[[1, 2], [3]]".into()));
-    expect_error(post("").multipart(f).send().await.unwrap(), 400, "bad_endpoints").await;
+    expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        400,
+        "bad_endpoints",
+    )
+    .await;
     let f = form(photo(), Some("[[10, 10], [640, 100]]".into()));
-    let body = expect_error(post("").multipart(f).send().await.unwrap(), 422, "endpoint_outside_image").await;
+    let body = expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        422,
+        "endpoint_outside_image",
+    )
+    .await;
     assert!(body["error"]["message"].as_str().unwrap().contains("#1"));
-    expect_error(post("").multipart(form(photo(), None)).send().await.unwrap(), 422, "endpoints_required").await;
+    expect_error(
+        post("")
+            .multipart(form(photo(), None))
+            .send()
+            .await
+            .unwrap(),
+        422,
+        "endpoints_required",
+    )
+    .await;
     // Bad query values.
-    for bad in ["?mask=rainbow", "?overlay=maybe", "?format=gif", "?colour=red"] {
+    for bad in [
+        "?mask=rainbow",
+        "?overlay=maybe",
+        "?format=gif",
+        "?colour=red",
+    ] {
         let f = form(photo(), Some(ends.clone()));
-        expect_error(post(bad).multipart(f).send().await.unwrap(), 400, "bad_query").await;
+        expect_error(
+            post(bad).multipart(f).send().await.unwrap(),
+            400,
+            "bad_query",
+        )
+        .await;
     }
     let f = form(photo(), Some(ends.clone()));
-    expect_error(post("?preset=nope").multipart(f).send().await.unwrap(), 400, "unknown_preset").await;
+    expect_error(
+        post("?preset=nope").multipart(f).send().await.unwrap(),
+        400,
+        "unknown_preset",
+    )
+    .await;
     // Options: bad JSON, unknown field, out of range.
     let f = form(photo(), Some(ends.clone())).text("options", "{not json");
-    expect_error(post("").multipart(f).send().await.unwrap(), 400, "bad_options").await;
+    expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        400,
+        "bad_options",
+    )
+    .await;
     let f = form(photo(), Some(ends.clone())).text("options", r#"{"segments": 5}"#);
-    expect_error(post("").multipart(f).send().await.unwrap(), 400, "bad_options").await;
+    expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        400,
+        "bad_options",
+    )
+    .await;
     let f = form(photo(), Some(ends.clone())).text("options", r#"{"n_segments": 0}"#);
-    expect_error(post("").multipart(f).send().await.unwrap(), 422, "option_out_of_range").await;
+    expect_error(
+        post("").multipart(f).send().await.unwrap(),
+        422,
+        "option_out_of_range",
+    )
+    .await;
     // Wrong method, unknown route.
-    expect_error(c.get(app.url("/segment")).send().await.unwrap(), 405, "method_not_allowed").await;
-    expect_error(c.get(app.url("/nowhere")).send().await.unwrap(), 404, "not_found").await;
+    expect_error(
+        c.get(app.url("/segment")).send().await.unwrap(),
+        405,
+        "method_not_allowed",
+    )
+    .await;
+    expect_error(
+        c.get(app.url("/nowhere")).send().await.unwrap(),
+        404,
+        "not_found",
+    )
+    .await;
 
     // Still up and still right.
-    let ok = post("").multipart(form(photo(), Some(ends))).send().await.unwrap();
+    let ok = post("")
+        .multipart(form(photo(), Some(ends)))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(ok.status(), 200);
 }
 
@@ -247,7 +456,11 @@ fn pixel_bomb() -> Vec<u8> {
     for &b in &ihdr {
         crc ^= b as u32;
         for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
@@ -259,10 +472,19 @@ fn pixel_bomb() -> Vec<u8> {
 
 /// A large photo (the dataset image scaled 3x) and options that make the work slow.
 fn slow_request(app: &TestApp) -> reqwest::RequestBuilder {
-    let img = image::load_from_memory(&photo()).unwrap().resize_exact(1920, 1440, image::imageops::FilterType::Triangle);
+    let img = image::load_from_memory(&photo()).unwrap().resize_exact(
+        1920,
+        1440,
+        image::imageops::FilterType::Triangle,
+    );
     let mut jpeg = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut jpeg), image::ImageFormat::Jpeg).unwrap();
-    let f = form(jpeg, Some("[[400, 400]]".into())).text("options", r#"{"slic_iterations": 50, "n_segments": 8000}"#);
+    img.write_to(
+        &mut std::io::Cursor::new(&mut jpeg),
+        image::ImageFormat::Jpeg,
+    )
+    .unwrap();
+    let f = form(jpeg, Some("[[400, 400]]".into()))
+        .text("options", r#"{"slic_iterations": 50, "n_segments": 8000}"#);
     app.client.post(app.url("/segment")).multipart(f)
 }
 
@@ -272,14 +494,20 @@ async fn overload_is_answered_429_with_retry_after() {
     let requests: Vec<_> = (0..4).map(|_| slow_request(&app).send()).collect();
     let responses = futures_join(requests).await;
     let statuses: Vec<u16> = responses.iter().map(|r| r.status().as_u16()).collect();
-    assert!(statuses.iter().all(|&s| s == 200 || s == 429), "{statuses:?}");
+    assert!(
+        statuses.iter().all(|&s| s == 200 || s == 429),
+        "{statuses:?}"
+    );
     assert!(statuses.contains(&200), "{statuses:?}");
-    let rejected: Vec<&reqwest::Response> = responses.iter().filter(|r| r.status() == 429).collect();
+    let rejected: Vec<&reqwest::Response> =
+        responses.iter().filter(|r| r.status() == 429).collect();
     assert!(!rejected.is_empty(), "{statuses:?}");
     assert_eq!(rejected[0].headers()["retry-after"], "3");
 }
 
-async fn futures_join<F: std::future::Future<Output = reqwest::Result<reqwest::Response>> + Send + 'static>(
+async fn futures_join<
+    F: std::future::Future<Output = reqwest::Result<reqwest::Response>> + Send + 'static,
+>(
     futures: Vec<F>,
 ) -> Vec<reqwest::Response> {
     let handles: Vec<_> = futures.into_iter().map(tokio::spawn).collect();
@@ -296,7 +524,15 @@ async fn deadline_gives_504() {
     let response = slow_request(&app).send().await.unwrap();
     expect_error(response, 504, "deadline_exceeded").await;
     // The server is fine afterwards.
-    assert_eq!(app.client.get(app.url("/healthz")).send().await.unwrap().status(), 200);
+    assert_eq!(
+        app.client
+            .get(app.url("/healthz"))
+            .send()
+            .await
+            .unwrap()
+            .status(),
+        200
+    );
 }
 
 fn metric_value(text: &str, name: &str, labels: &[&str]) -> f64 {
@@ -309,8 +545,21 @@ fn metric_value(text: &str, name: &str, labels: &[&str]) -> f64 {
 #[tokio::test(flavor = "multi_thread")]
 async fn metrics_change_after_requests() {
     let app = spawn_app(&[]).await;
-    let scrape = || async { app.client.get(app.url("/metrics")).send().await.unwrap().text().await.unwrap() };
-    let labels = ["route=\"/segment\"", "status_class=\"2xx\"", "preset=\"clutter\""];
+    let scrape = || async {
+        app.client
+            .get(app.url("/metrics"))
+            .send()
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap()
+    };
+    let labels = [
+        "route=\"/segment\"",
+        "status_class=\"2xx\"",
+        "preset=\"clutter\"",
+    ];
     let before = scrape().await;
     let r = app
         .client
@@ -321,7 +570,8 @@ async fn metrics_change_after_requests() {
         .unwrap();
     assert_eq!(r.status(), 200);
     let after = scrape().await;
-    let delta = metric_value(&after, "ariadne_requests_total", &labels) - metric_value(&before, "ariadne_requests_total", &labels);
+    let delta = metric_value(&after, "ariadne_requests_total", &labels)
+        - metric_value(&before, "ariadne_requests_total", &labels);
     assert!(delta >= 1.0, "requests counter did not move");
     for name in [
         "ariadne_request_duration_seconds_bucket",
@@ -342,7 +592,15 @@ async fn readiness_follows_warm_up_and_shutdown_and_drains_in_flight_work() {
         async move { c.get(u).send().await.unwrap().status().as_u16() }
     };
     assert_eq!(ready(&app).await, 503, "not ready before warm-up");
-    assert_eq!(app.client.get(app.url("/healthz")).send().await.unwrap().status(), 200);
+    assert_eq!(
+        app.client
+            .get(app.url("/healthz"))
+            .send()
+            .await
+            .unwrap()
+            .status(),
+        200
+    );
 
     let mut app2 = spawn_app(&["--shutdown-delay-s", "1"]).await;
     assert_eq!(ready(&app2).await, 200);
@@ -354,7 +612,9 @@ async fn readiness_follows_warm_up_and_shutdown_and_drains_in_flight_work() {
     assert_eq!(ready(&app2).await, 503, "not ready while draining");
     let response = in_flight.await.unwrap().unwrap();
     assert_eq!(response.status(), 200, "in-flight request finished");
-    let server = tokio::time::timeout(Duration::from_secs(30), app2.server).await.unwrap();
+    let server = tokio::time::timeout(Duration::from_secs(30), app2.server)
+        .await
+        .unwrap();
     assert!(server.unwrap().is_ok(), "server exits cleanly");
     app.stop();
 }
@@ -362,11 +622,20 @@ async fn readiness_follows_warm_up_and_shutdown_and_drains_in_flight_work() {
 #[tokio::test(flavor = "multi_thread")]
 async fn openapi_is_served_committed_and_complete() {
     let app = spawn_app(&[]).await;
-    let served: Value = app.client.get(app.url("/openapi.json")).send().await.unwrap().json().await.unwrap();
+    let served: Value = app
+        .client
+        .get(app.url("/openapi.json"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
     let generated: Value = serde_json::to_value(http::openapi()).unwrap();
     assert_eq!(served, generated);
     let committed_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("openapi/openapi.json");
-    let committed: Value = serde_json::from_str(&std::fs::read_to_string(&committed_path).unwrap()).unwrap();
+    let committed: Value =
+        serde_json::from_str(&std::fs::read_to_string(&committed_path).unwrap()).unwrap();
     assert_eq!(
         committed, generated,
         "openapi/openapi.json is stale: regenerate with `cargo run -- openapi > openapi/openapi.json`"

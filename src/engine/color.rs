@@ -100,7 +100,13 @@ impl LabImage {
             a.push(pa);
             b.push(pb);
         }
-        Self { width, height, l, a, b }
+        Self {
+            width,
+            height,
+            l,
+            a,
+            b,
+        }
     }
 
     /// Lab colour of one pixel.
@@ -208,7 +214,10 @@ mod tests {
         for (rgb, want) in cases {
             let got = rgb_to_lab(rgb);
             for c in 0..3 {
-                assert!((got[c] - want[c]).abs() < 0.15, "{rgb:?}: {got:?} vs {want:?}");
+                assert!(
+                    (got[c] - want[c]).abs() < 0.15,
+                    "{rgb:?}: {got:?} vs {want:?}"
+                );
             }
         }
     }

@@ -92,7 +92,9 @@ impl Graph {
             .collect();
         for (k, v) in vertices.iter().enumerate() {
             let inv = 1.0 / v.pixels.max(1) as f32;
-            histograms[k * cells..(k + 1) * cells].iter_mut().for_each(|c| *c *= inv);
+            histograms[k * cells..(k + 1) * cells]
+                .iter_mut()
+                .for_each(|c| *c *= inv);
         }
         let mut offsets = Vec::with_capacity(n + 1);
         let mut adjacency = Vec::new();
@@ -102,7 +104,13 @@ impl Graph {
             adjacency.extend_from_slice(&list);
             offsets.push(adjacency.len() as u32);
         }
-        Self { vertices, offsets, adjacency, histograms, cells }
+        Self {
+            vertices,
+            offsets,
+            adjacency,
+            histograms,
+            cells,
+        }
     }
 
     /// Number of vertices.
@@ -189,7 +197,15 @@ mod tests {
 
     fn graph_of(rgb: &[u8], w: usize, h: usize, n: u32) -> (Superpixels, Graph) {
         let lab = LabImage::from_rgb(rgb, w, h);
-        let sp = slic(&lab, &SlicSettings { n_segments: n, compactness: 10.0, iterations: 5, min_size_factor: 0.25 });
+        let sp = slic(
+            &lab,
+            &SlicSettings {
+                n_segments: n,
+                compactness: 10.0,
+                iterations: 5,
+                min_size_factor: 0.25,
+            },
+        );
         let g = Graph::build(&sp, rgb, &lab, 4);
         (sp, g)
     }
@@ -198,8 +214,16 @@ mod tests {
     fn grid_labels_give_grid_adjacency() {
         // Hand-made 2x2 blocks of 3x3 pixels.
         let (w, h) = (6, 6);
-        let labels: Vec<u32> = (0..36).map(|p| ((p / 6) / 3 * 2 + (p % 6) / 3) as u32).collect();
-        let sp = Superpixels { width: w, height: h, labels, count: 4, step: 3.0 };
+        let labels: Vec<u32> = (0..36)
+            .map(|p| ((p / 6) / 3 * 2 + (p % 6) / 3) as u32)
+            .collect();
+        let sp = Superpixels {
+            width: w,
+            height: h,
+            labels,
+            count: 4,
+            step: 3.0,
+        };
         let rgb = vec![100u8; 36 * 3];
         let lab = LabImage::from_rgb(&rgb, w, h);
         let g = Graph::build(&sp, &rgb, &lab, 3);

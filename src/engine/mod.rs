@@ -100,7 +100,13 @@ pub fn validate_ends(ends: &[[f64; 2]], width: u32, height: u32) -> Result<(), E
             return Err(EngineError::EndpointNotFinite { index });
         }
         if x < 0.0 || y < 0.0 || x > (width - 1) as f64 || y > (height - 1) as f64 {
-            return Err(EngineError::EndpointOutside { index, x, y, width, height });
+            return Err(EngineError::EndpointOutside {
+                index,
+                x,
+                y,
+                width,
+                height,
+            });
         }
     }
     Ok(())
@@ -111,11 +117,19 @@ pub fn validate_ends(ends: &[[f64; 2]], width: u32, height: u32) -> Result<(), E
 ///
 /// Errors: invalid parameters, an image smaller than [`MIN_SIDE`], an end outside the
 /// image or not finite.
-pub fn segment(image: &RgbImage, ends: &[[f64; 2]], params: &Params) -> Result<Segmentation, EngineError> {
+pub fn segment(
+    image: &RgbImage,
+    ends: &[[f64; 2]],
+    params: &Params,
+) -> Result<Segmentation, EngineError> {
     params.validate()?;
     let (width, height) = image.dimensions();
     if width < MIN_SIDE || height < MIN_SIDE {
-        return Err(EngineError::ImageTooSmall { width, height, min: MIN_SIDE });
+        return Err(EngineError::ImageTooSmall {
+            width,
+            height,
+            min: MIN_SIDE,
+        });
     }
     validate_ends(ends, width, height)?;
     let mut timings = StageTimings::default();
@@ -142,18 +156,14 @@ pub fn segment(image: &RgbImage, ends: &[[f64; 2]], params: &Params) -> Result<S
         .iter()
         .map(|&[x, y]| {
             let (px, py) = (x.round() as usize, y.round() as usize);
-            Seed { point: [x as f32, y as f32], vertex: sp.labels[py * sp.width + px] }
+            Seed {
+                point: [x as f32, y as f32],
+                vertex: sp.labels[py * sp.width + px],
+            }
         })
         .collect();
     let walks = walk::walk_all(&graph, &lab, &seeds, sp.step, params);
     let chosen = pairing::pair(&walks, seeds.len(), params);
-    if std::env::var_os("ARIADNE_DEBUG").is_some() {
-        for w in &walks {
-            let last = graph.vertices[*w.vertices.last().unwrap() as usize].centroid;
-            eprintln!("seed {} ({:.0},{:.0}) -> {:?} at ({:.0},{:.0}) n={} len={:.0} vis={:.2} smooth={:.2} contrast={:.2} q={:.3}", w.seed, seeds[w.seed].point[0], seeds[w.seed].point[1], w.end, last[0], last[1], w.vertices.len(), w.length_px, w.visual, w.smoothness, w.contrast, w.quality());
-        }
-        for c in &chosen { eprintln!("chosen {:?}", c); }
-    }
     timings.walks = ms(t);
 
     let t = Instant::now();
@@ -161,7 +171,9 @@ pub fn segment(image: &RgbImage, ends: &[[f64; 2]], params: &Params) -> Result<S
     let mut end_cables = vec![None; ends.len()];
     for choice in &chosen {
         let walk = &walks[choice.walk];
-        let Some(mut cable) = model_cable(choice, walk, &walks, &seeds, &graph, &sp, &lab, image, params) else {
+        let Some(mut cable) = model_cable(
+            choice, walk, &walks, &seeds, &graph, &sp, &lab, image, params,
+        ) else {
             continue;
         };
         cable.id = cables.len();
@@ -203,17 +215,28 @@ fn model_cable(
     let start = seeds[choice.start].point;
     let mut points = vec![start];
     let mut weights = vec![END_WEIGHT];
-    points.extend(walk.vertices[1..].iter().map(|&v| graph.vertices[v as usize].centroid));
+    points.extend(
+        walk.vertices[1..]
+            .iter()
+            .map(|&v| graph.vertices[v as usize].centroid),
+    );
     if let Some(j) = choice.joined {
         let other = &joined_walks[j];
-        points.extend(other.vertices[1..].iter().rev().map(|&v| graph.vertices[v as usize].centroid));
+        points.extend(
+            other.vertices[1..]
+                .iter()
+                .rev()
+                .map(|&v| graph.vertices[v as usize].centroid),
+        );
     }
     weights.resize(points.len(), 1.0);
     let far_index = match choice.far {
         FarEnd::Seed(t) => {
             let target = seeds[t].point;
             // Centroids next to the far end may lie beside or beyond it: the end is exact.
-            while points.len() > 2 && dist(points[points.len() - 1], target) < params.close_radius_px * 0.5 {
+            while points.len() > 2
+                && dist(points[points.len() - 1], target) < params.close_radius_px * 0.5
+            {
                 points.pop();
                 weights.pop();
             }
@@ -237,9 +260,6 @@ fn model_cable(
     if params.refine {
         for _ in 0..REFINE_PASSES {
             let refined = refine::refine(&polyline, lab, params.refine_radius_px);
-            if std::env::var_os("ARIADNE_DEBUG").is_some() {
-                eprintln!("refine start {:?} coverage {:.2} width {:?}", start, refined.coverage, refined.width_px);
-            }
             width = refined.width_px.or(width);
             let mut pts = refined.points;
             let mut w = vec![1.0; pts.len()];
@@ -291,7 +311,12 @@ fn border_exit(from: [f32; 2], dir: [f32; 2], sp: &Superpixels, max_px: f32) -> 
 /// a cable spans about its width, so the side of the mean superpixel's square.
 fn fallback_width(walk: &Walk, graph: &Graph, sp: &Superpixels) -> f32 {
     let n = walk.vertices.len().max(1) as f32;
-    let area: f32 = walk.vertices.iter().map(|&v| graph.vertices[v as usize].pixels as f32).sum::<f32>() / n;
+    let area: f32 = walk
+        .vertices
+        .iter()
+        .map(|&v| graph.vertices[v as usize].pixels as f32)
+        .sum::<f32>()
+        / n;
     area.sqrt().min(sp.step * 2.0)
 }
 

@@ -60,7 +60,13 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
                 WalkEnd::Border => (FarEnd::Border, params.border_factor),
                 WalkEnd::Lost => (FarEnd::Open, params.lost_factor),
             };
-            Pairing { start: w.seed, far, walk: i, joined: None, score: w.quality() * factor }
+            Pairing {
+                start: w.seed,
+                far,
+                walk: i,
+                joined: None,
+                score: w.quality() * factor,
+            }
         })
         .collect();
     hypotheses.extend(joins(walks, params));
@@ -99,13 +105,17 @@ fn joins(walks: &[Walk], params: &Params) -> Vec<Pairing> {
             if a.seed == b.seed {
                 continue;
             }
-            let gap = [b.end_point[0] - a.end_point[0], b.end_point[1] - a.end_point[1]];
+            let gap = [
+                b.end_point[0] - a.end_point[0],
+                b.end_point[1] - a.end_point[1],
+            ];
             let d = (gap[0] * gap[0] + gap[1] * gap[1]).sqrt();
             if d > params.join_radius_px {
                 continue;
             }
             let facing = if d < 1e-3 {
-                -(a.end_heading[0] * b.end_heading[0] + a.end_heading[1] * b.end_heading[1]) >= cos_max
+                -(a.end_heading[0] * b.end_heading[0] + a.end_heading[1] * b.end_heading[1])
+                    >= cos_max
             } else {
                 let (ux, uy) = (gap[0] / d, gap[1] / d);
                 a.end_heading[0] * ux + a.end_heading[1] * uy >= cos_max

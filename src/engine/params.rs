@@ -134,7 +134,7 @@ impl Default for Params {
             min_cable_score: 0.05,
             min_cable_length_px: 30.0,
             smoothing: 1.0,
-            knot_spacing_px: 30.0,
+            knot_spacing_px: 45.0,
             polyline_step_px: 2.0,
             refine: true,
             refine_radius_px: 16.0,
@@ -179,42 +179,132 @@ impl Params {
 
     /// Checks every field against its allowed range.
     pub fn validate(&self) -> Result<(), EngineError> {
-        check("n_segments", self.n_segments as f32, 16.0, 20_000.0, "16 ..= 20000")?;
-        check("compactness", self.compactness, 0.01, 1000.0, "0.01 ..= 1000")?;
+        check(
+            "n_segments",
+            self.n_segments as f32,
+            16.0,
+            20_000.0,
+            "16 ..= 20000",
+        )?;
+        check(
+            "compactness",
+            self.compactness,
+            0.01,
+            1000.0,
+            "0.01 ..= 1000",
+        )?;
         check("sigma", self.sigma, 0.0, 10.0, "0 ..= 10")?;
-        check("slic_iterations", self.slic_iterations as f32, 1.0, 50.0, "1 ..= 50")?;
+        check(
+            "slic_iterations",
+            self.slic_iterations as f32,
+            1.0,
+            50.0,
+            "1 ..= 50",
+        )?;
         check("min_size_factor", self.min_size_factor, 0.0, 1.0, "0 ..= 1")?;
         check("hist_bins", self.hist_bins as f32, 1.0, 16.0, "1 ..= 16")?;
-        check("neighbourhood_order", self.neighbourhood_order as f32, 1.0, 8.0, "1 ..= 8")?;
+        check(
+            "neighbourhood_order",
+            self.neighbourhood_order as f32,
+            1.0,
+            8.0,
+            "1 ..= 8",
+        )?;
         check("jump_order", self.jump_order as f32, 1.0, 12.0, "1 ..= 12")?;
         check("c_visual", self.c_visual, 0.01, 1000.0, "0.01 ..= 1000")?;
         check("c_distance", self.c_distance, 0.01, 1000.0, "0.01 ..= 1000")?;
         check("max_step_px", self.max_step_px, 1.0, 1000.0, "1 ..= 1000")?;
         check("kappa", self.kappa, 0.0, 100.0, "0 ..= 100")?;
         check("max_turn_deg", self.max_turn_deg, 1.0, 180.0, "1 ..= 180")?;
-        check("heading_span_px", self.heading_span_px, 1.0, 500.0, "1 ..= 500")?;
-        check("close_radius_px", self.close_radius_px, 1.0, 500.0, "1 ..= 500")?;
+        check(
+            "heading_span_px",
+            self.heading_span_px,
+            1.0,
+            500.0,
+            "1 ..= 500",
+        )?;
+        check(
+            "close_radius_px",
+            self.close_radius_px,
+            1.0,
+            500.0,
+            "1 ..= 500",
+        )?;
         check("min_similarity", self.min_similarity, 0.0, 1.0, "0 ..= 1")?;
         check("min_contrast", self.min_contrast, 0.0, 1.0, "0 ..= 1")?;
         check("model_rate", self.model_rate, 0.0, 1.0, "0 ..= 1")?;
-        check("border_margin_px", self.border_margin_px, 0.0, 200.0, "0 ..= 200")?;
-        check("max_steps", self.max_steps as f32, 1.0, 10_000.0, "1 ..= 10000")?;
-        check("unconfirmed_factor", self.unconfirmed_factor, 0.0, 1.0, "0 ..= 1")?;
+        check(
+            "border_margin_px",
+            self.border_margin_px,
+            0.0,
+            200.0,
+            "0 ..= 200",
+        )?;
+        check(
+            "max_steps",
+            self.max_steps as f32,
+            1.0,
+            10_000.0,
+            "1 ..= 10000",
+        )?;
+        check(
+            "unconfirmed_factor",
+            self.unconfirmed_factor,
+            0.0,
+            1.0,
+            "0 ..= 1",
+        )?;
         check("border_factor", self.border_factor, 0.0, 1.0, "0 ..= 1")?;
         check("lost_factor", self.lost_factor, 0.0, 1.0, "0 ..= 1")?;
-        check("join_radius_px", self.join_radius_px, 0.0, 1000.0, "0 ..= 1000")?;
+        check(
+            "join_radius_px",
+            self.join_radius_px,
+            0.0,
+            1000.0,
+            "0 ..= 1000",
+        )?;
         check("min_cable_score", self.min_cable_score, 0.0, 1.0, "0 ..= 1")?;
-        check("min_cable_length_px", self.min_cable_length_px, 0.0, 10_000.0, "0 ..= 10000")?;
+        check(
+            "min_cable_length_px",
+            self.min_cable_length_px,
+            0.0,
+            10_000.0,
+            "0 ..= 10000",
+        )?;
         check("smoothing", self.smoothing, 0.0, 1e6, "0 ..= 1e6")?;
-        check("knot_spacing_px", self.knot_spacing_px, 2.0, 10_000.0, "2 ..= 10000")?;
-        check("polyline_step_px", self.polyline_step_px, 0.1, 100.0, "0.1 ..= 100")?;
-        check("refine_radius_px", self.refine_radius_px, 1.0, 100.0, "1 ..= 100")?;
+        check(
+            "knot_spacing_px",
+            self.knot_spacing_px,
+            2.0,
+            10_000.0,
+            "2 ..= 10000",
+        )?;
+        check(
+            "polyline_step_px",
+            self.polyline_step_px,
+            0.1,
+            100.0,
+            "0.1 ..= 100",
+        )?;
+        check(
+            "refine_radius_px",
+            self.refine_radius_px,
+            1.0,
+            100.0,
+            "1 ..= 100",
+        )?;
         check("mask_width_px", self.mask_width_px, 0.0, 200.0, "0 ..= 200")?;
         Ok(())
     }
 }
 
-fn check(name: &'static str, value: f32, min: f32, max: f32, expected: &'static str) -> Result<(), EngineError> {
+fn check(
+    name: &'static str,
+    value: f32,
+    min: f32,
+    max: f32,
+    expected: &'static str,
+) -> Result<(), EngineError> {
     if value.is_finite() && (min..=max).contains(&value) {
         Ok(())
     } else {
@@ -239,7 +329,10 @@ mod tests {
         assert_eq!((c.n_segments, c.compactness, c.sigma), (1500, 10.0, 1.0));
         let d = Params::preset("default").unwrap();
         assert_eq!((d.n_segments, d.compactness, d.sigma), (2000, 20.0, 1.0));
-        assert!(matches!(Params::preset("nope"), Err(EngineError::UnknownPreset(..))));
+        assert!(matches!(
+            Params::preset("nope"),
+            Err(EngineError::UnknownPreset(..))
+        ));
     }
 
     #[test]
@@ -247,7 +340,12 @@ mod tests {
         let base = Params::default();
         let o: Map<String, Value> = serde_json::from_str(r#"{"n_segments": 1200}"#).unwrap();
         assert_eq!(base.with_overrides(&o).unwrap().n_segments, 1200);
-        for bad in [r#"{"n_segments": 0}"#, r#"{"sigma": -1}"#, r#"{"bogus": 1}"#, r#"{"kappa": "x"}"#] {
+        for bad in [
+            r#"{"n_segments": 0}"#,
+            r#"{"sigma": -1}"#,
+            r#"{"bogus": 1}"#,
+            r#"{"kappa": "x"}"#,
+        ] {
             let o: Map<String, Value> = serde_json::from_str(bad).unwrap();
             assert!(base.with_overrides(&o).is_err(), "{bad} accepted");
         }

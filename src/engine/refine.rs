@@ -52,7 +52,10 @@ pub fn sample_lab(lab: &LabImage, x: f32, y: f32) -> Option<[f32; 3]> {
 
 /// Per-channel median Lab colour along `line`.
 pub fn median_colour(lab: &LabImage, line: &[[f32; 2]]) -> Option<[f32; 3]> {
-    let samples: Vec<[f32; 3]> = line.iter().filter_map(|p| sample_lab(lab, p[0], p[1])).collect();
+    let samples: Vec<[f32; 3]> = line
+        .iter()
+        .filter_map(|p| sample_lab(lab, p[0], p[1]))
+        .collect();
     if samples.is_empty() {
         return None;
     }
@@ -74,7 +77,11 @@ pub fn normals(line: &[[f32; 2]]) -> Vec<[f32; 2]> {
             let b = line[(i + 1).min(n - 1)];
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
             let len = (dx * dx + dy * dy).sqrt();
-            if len < 1e-6 { [0.0, 0.0] } else { [-dy / len, dx / len] }
+            if len < 1e-6 {
+                [0.0, 0.0]
+            } else {
+                [-dy / len, dx / len]
+            }
         })
         .collect()
 }
@@ -83,7 +90,11 @@ pub fn normals(line: &[[f32; 2]]) -> Vec<[f32; 2]> {
 /// `radius` is the half-length of the profiles in pixels.
 pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
     let Some(cable) = median_colour(lab, line) else {
-        return Refined { points: line.to_vec(), width_px: None, coverage: 0.0 };
+        return Refined {
+            points: line.to_vec(),
+            width_px: None,
+            coverage: 0.0,
+        };
     };
     let normal = normals(line);
     let steps = (radius / PROFILE_STEP).round() as i32;
@@ -110,13 +121,21 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
             widths.push(width);
         }
     }
-    let coverage = if read == 0 { 0.0 } else { offsets.len() as f32 / read as f32 };
+    let coverage = if read == 0 {
+        0.0
+    } else {
+        offsets.len() as f32 / read as f32
+    };
     let width_px = (widths.len() >= 3).then(|| {
         widths.sort_by(f32::total_cmp);
         widths[widths.len() / 2]
     });
     if offsets.len() < 3 {
-        return Refined { points: line.to_vec(), width_px, coverage };
+        return Refined {
+            points: line.to_vec(),
+            width_px,
+            coverage,
+        };
     }
     let smooth = smooth_offsets(&offsets, line.len(), radius * 0.5);
     let points = line
@@ -125,7 +144,11 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
         .zip(&smooth)
         .map(|((p, n), &d)| [p[0] + d * n[0], p[1] + d * n[1]])
         .collect();
-    Refined { points, width_px, coverage }
+    Refined {
+        points,
+        width_px,
+        coverage,
+    }
 }
 
 /// Finds the cable across one profile; returns its centre offset and width in pixels,
@@ -141,9 +164,15 @@ fn read_profile(profile: &[[f32; 3]], cable: [f32; 3], centre: usize) -> Option<
     if de(left_bg, cable) < MIN_BACKGROUND_DE || de(right_bg, cable) < MIN_BACKGROUND_DE {
         return None;
     }
-    let fg: Vec<f32> = profile.iter().map(|&s| de(s, left_bg).min(de(s, right_bg))).collect();
+    let fg: Vec<f32> = profile
+        .iter()
+        .map(|&s| de(s, left_bg).min(de(s, right_bg)))
+        .collect();
     let search = centre / 2;
-    let peak = fg[centre - search..=centre + search].iter().copied().fold(0.0f32, f32::max);
+    let peak = fg[centre - search..=centre + search]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max);
     if peak < MIN_BACKGROUND_DE {
         return None;
     }

@@ -28,7 +28,9 @@ impl std::str::FromStr for MaskKind {
             "binary" => Ok(Self::Binary),
             "labels" => Ok(Self::Labels),
             "color" => Ok(Self::Color),
-            other => Err(format!("unknown mask kind `{other}` (expected binary, labels or color)")),
+            other => Err(format!(
+                "unknown mask kind `{other}` (expected binary, labels or color)"
+            )),
         }
     }
 }
@@ -45,7 +47,11 @@ pub enum Mask {
 /// The stroke width used for a cable: the fixed mask width when set, else its measured
 /// width.
 pub fn stroke_width(cable: &Cable, mask_width_px: f32) -> f32 {
-    if mask_width_px > 0.0 { mask_width_px } else { cable.width_px }
+    if mask_width_px > 0.0 {
+        mask_width_px
+    } else {
+        cable.width_px
+    }
 }
 
 /// Draws the mask of `kind` for all cables of `seg`, strokes `mask_width_px` wide
@@ -60,9 +66,13 @@ pub fn render_mask(seg: &Segmentation, kind: MaskKind, mask_width_px: f32) -> Ma
                     MaskKind::Binary => 255,
                     _ => (cable.id + 1).min(255) as u8,
                 };
-                stroke(&cable.polyline, stroke_width(cable, mask_width_px), w, h, |x, y| {
-                    img.put_pixel(x, y, Luma([value]))
-                });
+                stroke(
+                    &cable.polyline,
+                    stroke_width(cable, mask_width_px),
+                    w,
+                    h,
+                    |x, y| img.put_pixel(x, y, Luma([value])),
+                );
             }
             Mask::Gray(img)
         }
@@ -70,7 +80,13 @@ pub fn render_mask(seg: &Segmentation, kind: MaskKind, mask_width_px: f32) -> Ma
             let mut img = RgbImage::new(w, h);
             for cable in &seg.cables {
                 let c = Rgb(palette(cable.id));
-                stroke(&cable.polyline, stroke_width(cable, mask_width_px), w, h, |x, y| img.put_pixel(x, y, c));
+                stroke(
+                    &cable.polyline,
+                    stroke_width(cable, mask_width_px),
+                    w,
+                    h,
+                    |x, y| img.put_pixel(x, y, c),
+                );
             }
             Mask::Rgb(img)
         }
@@ -80,9 +96,13 @@ pub fn render_mask(seg: &Segmentation, kind: MaskKind, mask_width_px: f32) -> Ma
 /// The binary mask of one cable.
 pub fn cable_mask(cable: &Cable, width: u32, height: u32, mask_width_px: f32) -> GrayImage {
     let mut img = GrayImage::new(width, height);
-    stroke(&cable.polyline, stroke_width(cable, mask_width_px), width, height, |x, y| {
-        img.put_pixel(x, y, Luma([255]))
-    });
+    stroke(
+        &cable.polyline,
+        stroke_width(cable, mask_width_px),
+        width,
+        height,
+        |x, y| img.put_pixel(x, y, Luma([255])),
+    );
     img
 }
 
@@ -112,8 +132,15 @@ pub fn stroke(line: &[[f32; 2]], width: f32, w: u32, h: u32, mut set: impl FnMut
         let len2 = dx * dx + dy * dy;
         for y in y0..=y1 {
             for x in x0..=x1 {
-                let (px, py) = (x as f32 + MASK_PIXEL_CENTRE - a[0], y as f32 + MASK_PIXEL_CENTRE - a[1]);
-                let t = if len2 > 0.0 { ((px * dx + py * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+                let (px, py) = (
+                    x as f32 + MASK_PIXEL_CENTRE - a[0],
+                    y as f32 + MASK_PIXEL_CENTRE - a[1],
+                );
+                let t = if len2 > 0.0 {
+                    ((px * dx + py * dy) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 let (ex, ey) = (px - t * dx, py - t * dy);
                 if ex * ex + ey * ey <= r2 {
                     set(x as u32, y as u32);
@@ -164,7 +191,11 @@ pub fn overlay(photo: &RgbImage, seg: &Segmentation) -> RgbImage {
         let c = Rgb(palette(cable.id));
         stroke(&cable.polyline, 3.0, w, h, |x, y| img.put_pixel(x, y, c));
         for (end, given) in cable.ends.iter().zip(cable.end_indices) {
-            let ring = if given.is_some() { Rgb([255, 255, 255]) } else { Rgb([128, 128, 128]) };
+            let ring = if given.is_some() {
+                Rgb([255, 255, 255])
+            } else {
+                Rgb([128, 128, 128])
+            };
             draw_ring(&mut img, *end, 6.0, ring);
         }
         draw_number(&mut img, cable.id, cable.ends[0], c);
@@ -207,7 +238,11 @@ fn draw_number(img: &mut RgbImage, n: usize, at: [f32; 2], colour: Rgb<u8>) {
                 }
                 for dy in 0..DIGIT_SCALE as i64 {
                     for dx in 0..DIGIT_SCALE as i64 {
-                        let x = x0 + DIGIT_SCALE as i64 + k as i64 * glyph_w + col * DIGIT_SCALE as i64 + dx;
+                        let x = x0
+                            + DIGIT_SCALE as i64
+                            + k as i64 * glyph_w
+                            + col * DIGIT_SCALE as i64
+                            + dx;
                         let y = y0 + DIGIT_SCALE as i64 + row as i64 * DIGIT_SCALE as i64 + dy;
                         if x < w as i64 && y < h as i64 {
                             img.put_pixel(x as u32, y as u32, colour);
@@ -226,11 +261,15 @@ mod tests {
     #[test]
     fn stroke_of_a_horizontal_line_has_the_asked_width() {
         let mut hits = vec![0u32; 40 * 20];
-        stroke(&[[5.0, 10.25], [35.0, 10.25]], 7.0, 40, 20, |x, y| hits[(y * 40 + x) as usize] = 1);
+        stroke(&[[5.0, 10.25], [35.0, 10.25]], 7.0, 40, 20, |x, y| {
+            hits[(y * 40 + x) as usize] = 1
+        });
         let column: u32 = (0..20).map(|y| hits[y * 40 + 20]).sum();
         assert_eq!(column, 7);
         // Clipped at the frame, never out of bounds.
-        stroke(&[[-10.0, -10.0], [50.0, 30.0]], 9.0, 40, 20, |x, y| assert!(x < 40 && y < 20));
+        stroke(&[[-10.0, -10.0], [50.0, 30.0]], 9.0, 40, 20, |x, y| {
+            assert!(x < 40 && y < 20)
+        });
     }
 
     #[test]

@@ -22,13 +22,19 @@ impl BSpline {
     /// (same length; larger pulls harder), interior knots about `knot_spacing` pixels
     /// apart along the data, and second-difference penalty `smoothing`.
     /// Returns `None` for fewer than two distinct points.
-    pub fn fit(points: &[[f32; 2]], weights: &[f32], knot_spacing: f32, smoothing: f32) -> Option<Self> {
+    pub fn fit(
+        points: &[[f32; 2]],
+        weights: &[f32],
+        knot_spacing: f32,
+        smoothing: f32,
+    ) -> Option<Self> {
         const DEGREE: usize = 3;
         let mut u = Vec::with_capacity(points.len());
         let mut acc = 0.0f64;
         u.push(0.0);
         for w in points.windows(2) {
-            acc += (((w[1][0] - w[0][0]) as f64).powi(2) + ((w[1][1] - w[0][1]) as f64).powi(2)).sqrt();
+            acc += (((w[1][0] - w[0][0]) as f64).powi(2) + ((w[1][1] - w[0][1]) as f64).powi(2))
+                .sqrt();
             u.push(acc);
         }
         if points.len() < 2 || acc < 1e-6 {
@@ -71,7 +77,11 @@ impl BSpline {
             }
         }
         let control_points = solve_spd(&mut a, &b, n)?;
-        Some(Self { degree: DEGREE, knots, control_points })
+        Some(Self {
+            degree: DEGREE,
+            knots,
+            control_points,
+        })
     }
 
     /// Point at parameter `u` (clamped to [0, 1]).
@@ -122,14 +132,19 @@ pub fn resample(line: &[[f32; 2]], step: f32) -> Vec<[f32; 2]> {
         let mut at = step - carried;
         while at <= seg {
             let t = at / seg;
-            out.push([w[0][0] + t * (w[1][0] - w[0][0]), w[0][1] + t * (w[1][1] - w[0][1])]);
+            out.push([
+                w[0][0] + t * (w[1][0] - w[0][0]),
+                w[0][1] + t * (w[1][1] - w[0][1]),
+            ]);
             at += step;
         }
         carried = (carried + seg) % step;
     }
     let last = line[line.len() - 1];
     if out.last() != Some(&last) && line.len() > 1 {
-        let tail = out.last().map_or(f32::MAX, |p| ((p[0] - last[0]).powi(2) + (p[1] - last[1]).powi(2)).sqrt());
+        let tail = out.last().map_or(f32::MAX, |p| {
+            ((p[0] - last[0]).powi(2) + (p[1] - last[1]).powi(2)).sqrt()
+        });
         if tail < step * 0.5 && out.len() > 1 {
             out.pop();
         }
@@ -169,7 +184,11 @@ fn basis_functions(knots: &[f64], degree: usize, span: usize, u: f64, out: &mut 
         let mut saved = 0.0;
         for r in 0..j {
             let denom = right[r + 1] + left[j - r];
-            let temp = if denom.abs() < 1e-300 { 0.0 } else { out[r] / denom };
+            let temp = if denom.abs() < 1e-300 {
+                0.0
+            } else {
+                out[r] / denom
+            };
             out[r] = saved + right[r + 1] * temp;
             saved = left[j - r] * temp;
         }
@@ -243,7 +262,10 @@ mod tests {
         }
         let line = s.sample(2.0);
         let len = polyline_length(&line);
-        assert!((len - 100.0 * std::f32::consts::PI).abs() < 2.0, "length {len}");
+        assert!(
+            (len - 100.0 * std::f32::consts::PI).abs() < 2.0,
+            "length {len}"
+        );
     }
 
     #[test]

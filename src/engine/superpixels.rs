@@ -61,7 +61,13 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
             let x = ((i as f32 + 0.5) * cw).min(w as f32 - 1.0);
             let y = ((j as f32 + 0.5) * ch).min(h as f32 - 1.0);
             let idx = y as usize * w + x as usize;
-            centres.push(Centre { l: lab.l[idx], a: lab.a[idx], b: lab.b[idx], x, y });
+            centres.push(Centre {
+                l: lab.l[idx],
+                a: lab.a[idx],
+                b: lab.b[idx],
+                x,
+                y,
+            });
         }
     }
     // Initial labels: the grid cell, so that a pixel no window reaches still has one.
@@ -93,7 +99,11 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
                 let dy2 = dy * dy * spatial;
                 let row = y * w;
                 let range = row + x0..row + x1;
-                let (pl, pa, pb) = (&lab.l[range.clone()], &lab.a[range.clone()], &lab.b[range.clone()]);
+                let (pl, pa, pb) = (
+                    &lab.l[range.clone()],
+                    &lab.a[range.clone()],
+                    &lab.b[range.clone()],
+                );
                 let pd = &mut dist[range.clone()];
                 let plab = &mut labels[range];
                 let base_dx = x0 as f32 - c.x;
@@ -149,7 +159,13 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
     }
     let min_size = ((s.min_size_factor * step * step) as usize).max(1);
     let (labels, count) = enforce_connectivity(&labels, w, h, min_size);
-    Superpixels { width: w, height: h, labels, count, step }
+    Superpixels {
+        width: w,
+        height: h,
+        labels,
+        count,
+        step,
+    }
 }
 
 fn add(sum: &mut [f64; 6], acc: &[f64; 6]) {
@@ -162,7 +178,12 @@ fn add(sum: &mut [f64; 6], acc: &[f64; 6]) {
 /// `min_size` pixels takes the label of the region it touches before it in raster
 /// order (so the merged region stays connected); any other fragment gets a fresh label.
 /// Returns the new labels and their count.
-pub fn enforce_connectivity(labels: &[u32], w: usize, h: usize, min_size: usize) -> (Vec<u32>, usize) {
+pub fn enforce_connectivity(
+    labels: &[u32],
+    w: usize,
+    h: usize,
+    min_size: usize,
+) -> (Vec<u32>, usize) {
     const UNSET: u32 = u32::MAX;
     let mut out = vec![UNSET; labels.len()];
     let mut component: Vec<usize> = Vec::new();
@@ -230,7 +251,10 @@ mod tests {
         let (w, h) = (sp.width, sp.height);
         let mut seen = vec![false; sp.count];
         let (_, components) = enforce_connectivity(&sp.labels, w, h, 1);
-        assert_eq!(components, sp.count, "a label has more than one connected region");
+        assert_eq!(
+            components, sp.count,
+            "a label has more than one connected region"
+        );
         for &a in &sp.labels {
             assert!((a as usize) < sp.count);
             seen[a as usize] = true;
@@ -252,7 +276,12 @@ mod tests {
     #[test]
     fn superpixels_respect_a_strong_edge() {
         let lab = two_colour_image(64, 48);
-        let settings = SlicSettings { n_segments: 48, compactness: 10.0, iterations: 10, min_size_factor: 0.25 };
+        let settings = SlicSettings {
+            n_segments: 48,
+            compactness: 10.0,
+            iterations: 10,
+            min_size_factor: 0.25,
+        };
         let sp = slic(&lab, &settings);
         assert!(sp.count >= 30 && sp.count <= 70, "count {}", sp.count);
         assert_connected_dense(&sp);

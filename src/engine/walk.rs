@@ -77,7 +77,13 @@ impl Walk {
 const CONTRAST_SATURATION: f32 = 25.0;
 
 /// Runs all walks from all seeds. `lab` is used to measure lateral contrast.
-pub fn walk_all(graph: &Graph, lab: &LabImage, seeds: &[Seed], step_px: f32, params: &Params) -> Vec<Walk> {
+pub fn walk_all(
+    graph: &Graph,
+    lab: &LabImage,
+    seeds: &[Seed],
+    step_px: f32,
+    params: &Params,
+) -> Vec<Walk> {
     let mut walker = Walker::new(graph, lab, seeds, step_px, params);
     let mut walks = Vec::new();
     for (s, seed) in seeds.iter().enumerate() {
@@ -114,7 +120,13 @@ struct Walker<'a> {
 }
 
 impl<'a> Walker<'a> {
-    fn new(graph: &'a Graph, lab: &'a LabImage, seeds: &'a [Seed], step_px: f32, params: &'a Params) -> Self {
+    fn new(
+        graph: &'a Graph,
+        lab: &'a LabImage,
+        seeds: &'a [Seed],
+        step_px: f32,
+        params: &'a Params,
+    ) -> Self {
         Self {
             graph,
             lab,
@@ -161,8 +173,22 @@ impl<'a> Walker<'a> {
             // gives up: crossings and terminals can hide the cable for a few superpixels.
             let found = self
                 .best_candidate(id, head, here, dir, p.neighbourhood_order)
-                .or_else(|| self.best_candidate(id, head, here, dir, p.jump_order.max(p.neighbourhood_order)));
-            let Some(Candidate { vertex: c, similarity: sim, curvature: pc, contrast }) = found else {
+                .or_else(|| {
+                    self.best_candidate(
+                        id,
+                        head,
+                        here,
+                        dir,
+                        p.jump_order.max(p.neighbourhood_order),
+                    )
+                });
+            let Some(Candidate {
+                vertex: c,
+                similarity: sim,
+                curvature: pc,
+                contrast,
+            }) = found
+            else {
                 end = Some(self.stopped(s, here, dir));
                 break;
             };
@@ -197,9 +223,17 @@ impl<'a> Walker<'a> {
     }
 
     /// The best acceptable next vertex among those within `order` hops of `head`.
-    fn best_candidate(&mut self, id: u32, head: u32, here: [f32; 2], dir: [f32; 2], order: u32) -> Option<Candidate> {
+    fn best_candidate(
+        &mut self,
+        id: u32,
+        head: u32,
+        here: [f32; 2],
+        dir: [f32; 2],
+        order: u32,
+    ) -> Option<Candidate> {
         let p = self.params;
-        self.hood.collect(self.graph, head, order, &mut self.candidates);
+        self.hood
+            .collect(self.graph, head, order, &mut self.candidates);
         let mut best: Option<(f32, Candidate)> = None;
         for &(c, _) in &self.candidates {
             if self.in_walk[c as usize] == id {
@@ -222,7 +256,15 @@ impl<'a> Walker<'a> {
             let contrast = self.contrast(c, [step[0] / d, step[1] / d]);
             let score = pv * curvature * pd * contrast;
             if best.as_ref().is_none_or(|b| score > b.0) {
-                best = Some((score, Candidate { vertex: c, similarity, curvature, contrast }));
+                best = Some((
+                    score,
+                    Candidate {
+                        vertex: c,
+                        similarity,
+                        curvature,
+                        contrast,
+                    },
+                ));
             }
         }
         best.map(|b| b.1)
@@ -247,7 +289,8 @@ impl<'a> Walker<'a> {
             }
         }
         let dir = heading(points, p.heading_span_px);
-        self.near_border_heading_out(here, dir, 1.0).then_some(WalkEnd::Border)
+        self.near_border_heading_out(here, dir, 1.0)
+            .then_some(WalkEnd::Border)
     }
 
     /// How a walk that found no acceptable next vertex ends: on a seed just ahead (the
@@ -307,7 +350,11 @@ impl<'a> Walker<'a> {
             let sample = self.lab.at(y as usize * self.lab.width + x as usize);
             least = least.min(dist3(sample, vert.mean_lab));
         }
-        if least.is_finite() { (least / CONTRAST_SATURATION).min(1.0) } else { 0.0 }
+        if least.is_finite() {
+            (least / CONTRAST_SATURATION).min(1.0)
+        } else {
+            0.0
+        }
     }
 }
 
@@ -328,7 +375,11 @@ pub(crate) fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {
     }
     let v = [head[0] - from[0], head[1] - from[1]];
     let n = (v[0] * v[0] + v[1] * v[1]).sqrt();
-    if n < 1e-6 { [1.0, 0.0] } else { [v[0] / n, v[1] / n] }
+    if n < 1e-6 {
+        [1.0, 0.0]
+    } else {
+        [v[0] / n, v[1] / n]
+    }
 }
 
 #[inline]

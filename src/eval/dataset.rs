@@ -29,7 +29,9 @@ pub enum DatasetError {
     #[error("{0}: {1}")]
     Engine(PathBuf, String),
     /// No image was found.
-    #[error("no images found under {0} (expected sub-folders such as simple/ and hard/ with NNNNN.jpg and NNNNN.txt)")]
+    #[error(
+        "no images found under {0} (expected sub-folders such as simple/ and hard/ with NNNNN.jpg and NNNNN.txt)"
+    )]
     Empty(PathBuf),
 }
 
@@ -77,7 +79,8 @@ impl Sample {
 }
 
 fn read_mask(path: &Path) -> Result<GrayImage, DatasetError> {
-    let img = image::open(path).map_err(|e| DatasetError::Image(path.to_path_buf(), e.to_string()))?;
+    let img =
+        image::open(path).map_err(|e| DatasetError::Image(path.to_path_buf(), e.to_string()))?;
     Ok(img.into_luma8())
 }
 
@@ -105,9 +108,16 @@ pub fn load_dataset(dir: &Path) -> Result<Vec<Sample>, DatasetError> {
             }
             let text = std::fs::read_to_string(&txt).map_err(|e| DatasetError::io(&txt, e))?;
             samples.push(Sample {
-                set: set.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
-                name: txt.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
-                cables: parse_centrelines(&text).map_err(|(line, msg)| DatasetError::Parse(txt.clone(), line, msg))?,
+                set: set
+                    .file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                name: txt
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                cables: parse_centrelines(&text)
+                    .map_err(|(line, msg)| DatasetError::Parse(txt.clone(), line, msg))?,
                 image,
             });
         }
@@ -126,13 +136,18 @@ pub fn parse_centrelines(text: &str) -> Result<Vec<Vec<[f32; 2]>>, (usize, Strin
         if nums.is_empty() {
             continue;
         }
-        let k: usize = nums[0].parse().map_err(|_| (i + 1, format!("bad point count `{}`", nums[0])))?;
+        let k: usize = nums[0]
+            .parse()
+            .map_err(|_| (i + 1, format!("bad point count `{}`", nums[0])))?;
         if nums.len() < 1 + 2 * k || k < 2 {
             return Err((i + 1, format!("expected {k} points (at least 2)")));
         }
         let mut pts = Vec::with_capacity(k);
         for j in 0..k {
-            let parse = |s: &str| s.parse::<f32>().map_err(|_| (i + 1, format!("bad coordinate `{s}`")));
+            let parse = |s: &str| {
+                s.parse::<f32>()
+                    .map_err(|_| (i + 1, format!("bad coordinate `{s}`")))
+            };
             pts.push([parse(nums[1 + 2 * j])?, parse(nums[2 + 2 * j])?]);
         }
         cables.push(pts);

@@ -14,7 +14,11 @@ pub fn iou(a: &GrayImage, b: &GrayImage) -> f64 {
         inter += (x && y) as u64;
         union += (x || y) as u64;
     }
-    if union == 0 { 1.0 } else { inter as f64 / union as f64 }
+    if union == 0 {
+        1.0
+    } else {
+        inter as f64 / union as f64
+    }
 }
 
 /// One-to-one matches between `found` and `truth` masks with IoU ≥ `min_iou`, chosen
@@ -76,7 +80,8 @@ pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
             let cables: usize = rs.iter().map(|r| r.gt_cables).sum();
             let found: usize = rs.iter().map(|r| r.found_cables).sum();
             let matched: usize = rs.iter().map(|r| r.matched_cables).sum();
-            let matched_iou: f64 = rs.iter().map(|r| r.matched_iou_sum).sum::<f64>() / matched.max(1) as f64;
+            let matched_iou: f64 =
+                rs.iter().map(|r| r.matched_iou_sum).sum::<f64>() / matched.max(1) as f64;
             let weighted: f64 = rs.iter().map(|r| r.gt_cables as f64 * r.iou).sum();
             let mut totals: Vec<f64> = rs.iter().map(|r| r.timings_ms.total).collect();
             totals.sort_by(f64::total_cmp);
@@ -99,7 +104,9 @@ mod tests {
     use image::Luma;
 
     fn rect(x0: u32, x1: u32) -> GrayImage {
-        GrayImage::from_fn(10, 10, |x, _| Luma([if (x0..x1).contains(&x) { 255 } else { 0 }]))
+        GrayImage::from_fn(10, 10, |x, _| {
+            Luma([if (x0..x1).contains(&x) { 255 } else { 0 }])
+        })
     }
 
     #[test]

@@ -128,7 +128,9 @@ mod tests {
             let mut drawn = GrayImage::new(gt.width(), gt.height());
             for c in &sample.cables {
                 let line = crate::engine::spline::resample(c, 1.0);
-                render::stroke(&line, width, gt.width(), gt.height(), |x, y| drawn.put_pixel(x, y, Luma([255])));
+                render::stroke(&line, width, gt.width(), gt.height(), |x, y| {
+                    drawn.put_pixel(x, y, Luma([255]))
+                });
             }
             let v = iou(&drawn, &gt);
             eprintln!("{} {} {v:.3}", sample.set, sample.name);

@@ -107,7 +107,12 @@ impl Presets {
         let entries: BTreeMap<String, serde_json::Map<String, serde_json::Value>> =
             serde_json::from_str(&text).map_err(|e| PresetsError::Json(path.into(), e))?;
         for (name, overrides) in entries {
-            let base = presets.0.get(&name).or_else(|| presets.0.get("default")).cloned().unwrap_or_default();
+            let base = presets
+                .0
+                .get(&name)
+                .or_else(|| presets.0.get("default"))
+                .cloned()
+                .unwrap_or_default();
             let params = base
                 .with_overrides(&overrides)
                 .map_err(|e| PresetsError::Invalid(path.into(), name.clone(), e))?;
@@ -136,15 +141,25 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("ariadne-presets-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("p.json");
-        std::fs::write(&file, r#"{"clutter": {"n_segments": 1200}, "cell-7": {"compactness": 15}}"#).unwrap();
+        std::fs::write(
+            &file,
+            r#"{"clutter": {"n_segments": 1200}, "cell-7": {"compactness": 15}}"#,
+        )
+        .unwrap();
         let p = Presets::load(Some(&file)).unwrap();
         assert_eq!(p.get("clutter").unwrap().n_segments, 1200);
         assert_eq!(p.get("clutter").unwrap().compactness, 10.0);
         assert_eq!(p.get("cell-7").unwrap().compactness, 15.0);
         assert_eq!(p.names(), vec!["cell-7", "clutter", "default"]);
         std::fs::write(&file, r#"{"bad": {"n_segments": 0}}"#).unwrap();
-        assert!(matches!(Presets::load(Some(&file)), Err(PresetsError::Invalid(..))));
+        assert!(matches!(
+            Presets::load(Some(&file)),
+            Err(PresetsError::Invalid(..))
+        ));
         std::fs::write(&file, "[1, 2]").unwrap();
-        assert!(matches!(Presets::load(Some(&file)), Err(PresetsError::Json(..))));
+        assert!(matches!(
+            Presets::load(Some(&file)),
+            Err(PresetsError::Json(..))
+        ));
     }
 }

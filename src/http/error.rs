@@ -80,7 +80,10 @@ pub struct ErrorDetail {
 impl ApiError {
     /// A 400 with this code and message.
     pub fn bad_request(code: &'static str, message: impl Into<String>) -> Self {
-        Self::BadRequest { code, message: message.into() }
+        Self::BadRequest {
+            code,
+            message: message.into(),
+        }
     }
 
     /// The HTTP status of this error.
@@ -101,7 +104,9 @@ impl ApiError {
     /// The stable code of this error.
     pub fn code(&self) -> &'static str {
         match self {
-            Self::BadRequest { code, .. } | Self::TooLarge { code, .. } | Self::Unprocessable { code, .. } => code,
+            Self::BadRequest { code, .. }
+            | Self::TooLarge { code, .. }
+            | Self::Unprocessable { code, .. } => code,
             Self::UnsupportedMediaType(_) => "unsupported_media_type",
             Self::QueueFull { .. } => "queue_full",
             Self::DeadlineExceeded(_) => "deadline_exceeded",
@@ -117,8 +122,14 @@ impl From<DecodeError> for ApiError {
         match e {
             DecodeError::Empty => Self::bad_request("empty_image", e.to_string()),
             DecodeError::Unsupported(_) => Self::UnsupportedMediaType(e.to_string()),
-            DecodeError::TooManyPixels { .. } => Self::TooLarge { code: "too_many_pixels", message: e.to_string() },
-            DecodeError::Corrupt(_) | DecodeError::Unrecognised => Self::Unprocessable { code: "undecodable_image", message: e.to_string() },
+            DecodeError::TooManyPixels { .. } => Self::TooLarge {
+                code: "too_many_pixels",
+                message: e.to_string(),
+            },
+            DecodeError::Corrupt(_) | DecodeError::Unrecognised => Self::Unprocessable {
+                code: "undecodable_image",
+                message: e.to_string(),
+            },
         }
     }
 }
@@ -127,12 +138,19 @@ impl From<EngineError> for ApiError {
     fn from(e: EngineError) -> Self {
         let code = match e {
             EngineError::BadOptions(_) => return Self::bad_request("bad_options", e.to_string()),
-            EngineError::UnknownPreset(..) => return Self::bad_request("unknown_preset", e.to_string()),
+            EngineError::UnknownPreset(..) => {
+                return Self::bad_request("unknown_preset", e.to_string());
+            }
             EngineError::InvalidParameter { .. } => "option_out_of_range",
-            EngineError::EndpointOutside { .. } | EngineError::EndpointNotFinite { .. } => "endpoint_outside_image",
+            EngineError::EndpointOutside { .. } | EngineError::EndpointNotFinite { .. } => {
+                "endpoint_outside_image"
+            }
             EngineError::ImageTooSmall { .. } => "image_too_small",
         };
-        Self::Unprocessable { code, message: e.to_string() }
+        Self::Unprocessable {
+            code,
+            message: e.to_string(),
+        }
     }
 }
 
@@ -146,10 +164,17 @@ impl IntoResponse for ApiError {
             }
             other => other.to_string(),
         };
-        let body = ErrorBody { error: ErrorDetail { code: self.code().to_string(), message } };
+        let body = ErrorBody {
+            error: ErrorDetail {
+                code: self.code().to_string(),
+                message,
+            },
+        };
         let mut response = (status, Json(body)).into_response();
         if let Self::QueueFull { retry_after_s, .. } = self {
-            response.headers_mut().insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
+            response
+                .headers_mut()
+                .insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
         }
         response
     }

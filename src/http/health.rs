@@ -21,7 +21,9 @@ pub struct Health {
 /// Liveness: the process answers. Never touches the model or the pool.
 #[utoipa::path(get, path = "/healthz", responses((status = 200, description = "Alive", body = Health)), tag = "operations")]
 pub async fn healthz() -> Json<Health> {
-    Json(Health { status: "ok".into() })
+    Json(Health {
+        status: "ok".into(),
+    })
 }
 
 /// Readiness: 200 once warmed up, 503 before that and while draining.
@@ -40,9 +42,19 @@ pub async fn readyz(State(state): State<AppState>) -> (StatusCode, Json<Health>)
     } else if !state.ready.load(Ordering::SeqCst) {
         "starting"
     } else {
-        return (StatusCode::OK, Json(Health { status: "ok".into() }));
+        return (
+            StatusCode::OK,
+            Json(Health {
+                status: "ok".into(),
+            }),
+        );
     };
-    (StatusCode::SERVICE_UNAVAILABLE, Json(Health { status: status.into() }))
+    (
+        StatusCode::SERVICE_UNAVAILABLE,
+        Json(Health {
+            status: status.into(),
+        }),
+    )
 }
 
 /// Prometheus metrics in the text exposition format.
@@ -56,5 +68,8 @@ pub async fn metrics_text(State(state): State<AppState>) -> impl IntoResponse {
     let counts = state.pool.counts();
     ::metrics::gauge!(super::metrics::QUEUE_DEPTH).set(counts.queued.load(Ordering::SeqCst) as f64);
     ::metrics::gauge!(super::metrics::IN_FLIGHT).set(counts.running.load(Ordering::SeqCst) as f64);
-    ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], super::metrics::handle().render())
+    (
+        [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
+        super::metrics::handle().render(),
+    )
 }

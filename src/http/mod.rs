@@ -107,7 +107,10 @@ pub fn app(state: AppState) -> Router {
         .merge(SwaggerUi::new("/docs").url("/openapi.json", api))
         .fallback(not_found)
         .method_not_allowed_fallback(method_not_allowed)
-        .route_layer(middleware::from_fn_with_state(state.clone(), record_metrics))
+        .route_layer(middleware::from_fn_with_state(
+            state.clone(),
+            record_metrics,
+        ))
         .layer(DefaultBodyLimit::max(body_limit))
         .layer(middleware::from_fn(request_id::layer))
         .with_state(state)
@@ -217,7 +220,10 @@ pub async fn serve(
     let stop = async move {
         shutdown.await;
         drain_state.draining.store(true, Ordering::SeqCst);
-        tracing::info!(delay_s = delay.as_secs(), "shutdown requested: not ready, draining");
+        tracing::info!(
+            delay_s = delay.as_secs(),
+            "shutdown requested: not ready, draining"
+        );
         tokio::time::sleep(delay).await;
         let _ = signalled_tx.send(true);
     };
@@ -268,7 +274,11 @@ pub fn init_logging(format: LogFormat) {
     let builder = tracing_subscriber::fmt().with_env_filter(filter);
     let _ = match format {
         LogFormat::Text => builder.try_init(),
-        LogFormat::Json => builder.json().flatten_event(true).with_current_span(true).try_init(),
+        LogFormat::Json => builder
+            .json()
+            .flatten_event(true)
+            .with_current_span(true)
+            .try_init(),
     };
 }
 
@@ -281,7 +291,8 @@ pub fn run(config: ServeArgs) -> Result<(), String> {
         .build()
         .map_err(|e| format!("cannot start the async runtime: {e}"))?;
     runtime.block_on(async move {
-        let state = AppState::new(config.clone(), presets).map_err(|e| format!("cannot start workers: {e}"))?;
+        let state = AppState::new(config.clone(), presets)
+            .map_err(|e| format!("cannot start workers: {e}"))?;
         let listener = TcpListener::bind(config.bind)
             .await
             .map_err(|e| format!("cannot listen on {}: {e}", config.bind))?;
@@ -298,7 +309,9 @@ pub fn run(config: ServeArgs) -> Result<(), String> {
                 Err(e) => tracing::error!(error = %e, "warm-up failed: staying not ready"),
             }
         });
-        serve(listener, state, shutdown_signal()).await.map_err(|e| format!("server error: {e}"))?;
+        serve(listener, state, shutdown_signal())
+            .await
+            .map_err(|e| format!("server error: {e}"))?;
         tracing::info!("stopped");
         Ok(())
     })

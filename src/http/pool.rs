@@ -67,7 +67,12 @@ impl WorkerPool {
                 .name(format!("ariadne-worker-{i}"))
                 .spawn(move || worker_loop(&receiver))?;
         }
-        Ok(Self { sender, counts: Arc::new(PoolCounts::default()), workers, queue })
+        Ok(Self {
+            sender,
+            counts: Arc::new(PoolCounts::default()),
+            workers,
+            queue,
+        })
     }
 
     /// Number of worker threads.
@@ -159,7 +164,13 @@ mod tests {
         assert!(blocker.await.unwrap().unwrap().value);
         assert_eq!(queued.await.unwrap().unwrap().value, 7);
         let panicked = pool.try_submit(|| -> u8 { panic!("boom") }).unwrap();
-        assert_eq!(panicked.await.unwrap().unwrap_err(), JobPanicked("boom".into()));
-        assert_eq!(pool.try_submit(|| 9).unwrap().await.unwrap().unwrap().value, 9);
+        assert_eq!(
+            panicked.await.unwrap().unwrap_err(),
+            JobPanicked("boom".into())
+        );
+        assert_eq!(
+            pool.try_submit(|| 9).unwrap().await.unwrap().unwrap().value,
+            9
+        );
     }
 }

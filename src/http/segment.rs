@@ -125,15 +125,24 @@ pub async fn segment(
     let deadline = started + Duration::from_millis(state.config.deadline_ms);
     let query: SegmentQuery = match query.as_deref() {
         None | Some("") => SegmentQuery::default(),
-        Some(q) => serde_urlencoded::from_str(q).map_err(|e| ApiError::bad_request("bad_query", format!("invalid query string: {e}")))?,
+        Some(q) => serde_urlencoded::from_str(q).map_err(|e| {
+            ApiError::bad_request("bad_query", format!("invalid query string: {e}"))
+        })?,
     };
     let (image, part_ends, options) = read_body(&state, request).await?;
     if part_ends.is_some() && query.endpoints.is_some() {
-        return Err(ApiError::bad_request("bad_endpoints", "endpoints given both in the query and in the form; give them once"));
+        return Err(ApiError::bad_request(
+            "bad_endpoints",
+            "endpoints given both in the query and in the form; give them once",
+        ));
     }
     let ends = match part_ends.or(query.endpoints) {
-        Some(text) => cli::parse_endpoints(&text)
-            .map_err(|e| ApiError::bad_request("bad_endpoints", format!("endpoints must be a JSON array of [x, y] pairs: {e}")))?,
+        Some(text) => cli::parse_endpoints(&text).map_err(|e| {
+            ApiError::bad_request(
+                "bad_endpoints",
+                format!("endpoints must be a JSON array of [x, y] pairs: {e}"),
+            )
+        })?,
         None => {
             return Err(ApiError::Unprocessable {
                 code: "endpoints_required",
@@ -143,7 +152,13 @@ pub async fn segment(
     };
     let preset = query.preset.as_deref().unwrap_or("default");
     let base = state.presets.get(preset).ok_or_else(|| {
-        ApiError::bad_request("unknown_preset", format!("unknown preset `{preset}` (known: {})", state.presets.names().join(", ")))
+        ApiError::bad_request(
+            "unknown_preset",
+            format!(
+                "unknown preset `{preset}` (known: {})",
+                state.presets.names().join(", ")
+            ),
+        )
     })?;
     let params = match options {
         Some(o) => base.with_overrides(&o)?,
@@ -154,7 +169,13 @@ pub async fn segment(
     let pixels = w as u64 * h as u64;
     if pixels > state.config.max_pixels {
         metrics::reject("too_many_pixels");
-        return Err(decode::DecodeError::TooManyPixels { width: w, height: h, pixels, limit: state.config.max_pixels }.into());
+        return Err(decode::DecodeError::TooManyPixels {
+            width: w,
+            height: h,
+            pixels,
+            limit: state.config.max_pixels,
+        }
+        .into());
     }
     engine::validate_ends(&ends, w, h)?;
 
@@ -181,7 +202,10 @@ pub async fn segment(
         })
         .map_err(|_| {
             metrics::reject("queue_full");
-            ApiError::QueueFull { queue: state.pool.queue_capacity(), retry_after_s: state.config.retry_after_s }
+            ApiError::QueueFull {
+                queue: state.pool.queue_capacity(),
+                retry_after_s: state.config.retry_after_s,
+            }
         })?;
     let finished = tokio::time::timeout_at(deadline.into(), receiver).await;
     let started_job = match finished {
@@ -190,7 +214,9 @@ pub async fn segment(
             return Err(ApiError::DeadlineExceeded(state.config.deadline_ms));
         }
         Ok(Err(_)) => return Err(ApiError::Internal("worker dropped the job".into())),
-        Ok(Ok(Err(panic))) => return Err(ApiError::Internal(format!("worker panicked: {}", panic.0))),
+        Ok(Ok(Err(panic))) => {
+            return Err(ApiError::Internal(format!("worker panicked: {}", panic.0)));
+        }
         Ok(Ok(Ok(started_job))) => started_job,
     };
     let output = match started_job.value {
@@ -204,7 +230,11 @@ pub async fn segment(
     match output {
         Output::Png { png, cables } => {
             ::metrics::histogram!(metrics::CABLES).record(cables as f64);
-            Ok(([(header::CONTENT_TYPE, HeaderValue::from_static("image/png"))], png).into_response())
+            Ok((
+                [(header::CONTENT_TYPE, HeaderValue::from_static("image/png"))],
+                png,
+            )
+                .into_response())
         }
         Output::Json(mut response) => {
             ::metrics::histogram!(metrics::CABLES).record(response.cables.len() as f64);
@@ -217,14 +247,20 @@ pub async fn segment(
 
 /// Reads the image and the optional `endpoints` and `options` from a multipart form or
 /// a raw JPEG/PNG body.
-async fn read_body(state: &AppState, request: Request) -> Result<(Bytes, Option<String>, Option<Map<String, Value>>), ApiError> {
+async fn read_body(
+    state: &AppState,
+    request: Request,
+) -> Result<(Bytes, Option<String>, Option<Map<String, Value>>), ApiError> {
     let content_type = request
         .headers()
         .get(header::CONTENT_TYPE)
         .and_then(|v| v.to_str().ok())
         .unwrap_or("")
         .to_ascii_lowercase();
-    if let Some(len) = request.headers().get(header::CONTENT_LENGTH).and_then(|v| v.to_str().ok()?.parse::<usize>().ok())
+    if let Some(len) = request
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok()?.parse::<usize>().ok())
         && len > state.config.max_body_bytes
     {
         metrics::reject("body_too_large");
@@ -243,12 +279,20 @@ async fn read_body(state: &AppState, request: Request) -> Result<(Bytes, Option<
             };
             let name = field.name().unwrap_or("").to_string();
             match name.as_str() {
-                "image" => image = Some(field.bytes().await.map_err(|e| multipart_error(state, e))?),
-                "endpoints" => ends = Some(field.text().await.map_err(|e| multipart_error(state, e))?),
+                "image" => {
+                    image = Some(field.bytes().await.map_err(|e| multipart_error(state, e))?)
+                }
+                "endpoints" => {
+                    ends = Some(field.text().await.map_err(|e| multipart_error(state, e))?)
+                }
                 "options" => {
                     let text = field.text().await.map_err(|e| multipart_error(state, e))?;
-                    let map: Map<String, Value> = serde_json::from_str(&text)
-                        .map_err(|e| ApiError::bad_request("bad_options", format!("`options` must be a JSON object: {e}")))?;
+                    let map: Map<String, Value> = serde_json::from_str(&text).map_err(|e| {
+                        ApiError::bad_request(
+                            "bad_options",
+                            format!("`options` must be a JSON object: {e}"),
+                        )
+                    })?;
                     options = Some(map);
                 }
                 other => {
@@ -259,9 +303,14 @@ async fn read_body(state: &AppState, request: Request) -> Result<(Bytes, Option<
                 }
             }
         }
-        let image = image.ok_or_else(|| ApiError::bad_request("missing_image", "the form has no `image` part"))?;
+        let image = image.ok_or_else(|| {
+            ApiError::bad_request("missing_image", "the form has no `image` part")
+        })?;
         if image.is_empty() {
-            return Err(ApiError::bad_request("empty_image", "the `image` part is empty"));
+            return Err(ApiError::bad_request(
+                "empty_image",
+                "the `image` part is empty",
+            ));
         }
         return Ok((image, ends, options));
     }
@@ -275,7 +324,10 @@ async fn read_body(state: &AppState, request: Request) -> Result<(Bytes, Option<
             }
         })?;
         if body.is_empty() {
-            return Err(ApiError::bad_request("empty_image", "the request body is empty"));
+            return Err(ApiError::bad_request(
+                "empty_image",
+                "the request body is empty",
+            ));
         }
         return Ok((body, None, None));
     }
@@ -285,7 +337,10 @@ async fn read_body(state: &AppState, request: Request) -> Result<(Bytes, Option<
 }
 
 fn too_large_body(limit: usize) -> ApiError {
-    ApiError::TooLarge { code: "body_too_large", message: format!("the request body is over the limit of {limit} bytes") }
+    ApiError::TooLarge {
+        code: "body_too_large",
+        message: format!("the request body is over the limit of {limit} bytes"),
+    }
 }
 
 fn multipart_error(state: &AppState, e: axum::extract::multipart::MultipartError) -> ApiError {
@@ -310,10 +365,19 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
     let t = Instant::now();
     let mask_png = report::mask_png(&mask);
     let output = match job.format {
-        ResponseFormat::Png => Output::Png { png: mask_png, cables: seg.cables.len() },
+        ResponseFormat::Png => Output::Png {
+            png: mask_png,
+            cables: seg.cables.len(),
+        },
         ResponseFormat::Json => {
-            let overlay_png = overlay
-                .map(|o| report::base64(&report::png(o.as_raw(), o.width(), o.height(), image::ExtendedColorType::Rgb8)));
+            let overlay_png = overlay.map(|o| {
+                report::base64(&report::png(
+                    o.as_raw(),
+                    o.width(),
+                    o.height(),
+                    image::ExtendedColorType::Rgb8,
+                ))
+            });
             Output::Json(Box::new(SegmentResponse {
                 request_id: job.request_id,
                 width: seg.width,
@@ -322,7 +386,13 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
                 endpoints: report::endpoint_reports(&seg, &job.ends, &[]),
                 mask_png: report::base64(&mask_png),
                 overlay_png,
-                timings_ms: Timings { decode: decode_ms, mask: mask_ms, encode: ms(t), ..Timings::default() }.with_engine(&seg),
+                timings_ms: Timings {
+                    decode: decode_ms,
+                    mask: mask_ms,
+                    encode: ms(t),
+                    ..Timings::default()
+                }
+                .with_engine(&seg),
             }))
         }
     };

@@ -1,0 +1,150 @@
+//! End-to-end tests of the engine: synthetic scenes with known truth, and the
+//! development split of the real dataset with its accuracy floors.
+
+#![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
+
+use ariadne_dlo::engine::{self, MaskKind, Params, render};
+use ariadne_dlo::eval;
+use ariadne_dlo::synth::{Background, SceneSpec, scene};
+
+fn mask_of(seg: &engine::Segmentation, width_px: f32) -> image::GrayImage {
+    match render::render_mask(seg, MaskKind::Binary, width_px) {
+        engine::Mask::Gray(m) => m,
+        engine::Mask::Rgb(_) => unreachable!(),
+    }
+}
+
+/// Mean distance from each true centreline point to the nearest found polyline point.
+fn centreline_error(truth: &[[f32; 2]], found: &[[f32; 2]]) -> f32 {
+    let total: f32 = truth
+        .iter()
+        .map(|p| {
+            found
+                .iter()
+                .map(|q| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
+                .fold(f32::MAX, f32::min)
+        })
+        .sum();
+    total / truth.len() as f32
+}
+
+#[test]
+fn synthetic_scenes_are_recovered() {
+    let (mut ious, mut recovered, mut total) = (Vec::new(), 0, 0);
+    for (seed, background) in [
+        (1, Background::Plain),
+        (2, Background::Plain),
+        (3, Background::Textured),
+        (4, Background::Textured),
+    ] {
+        let spec = SceneSpec {
+            width: 320,
+            height: 240,
+            cables: 2,
+            cable_width: 9.0,
+            background,
+            seed,
+        };
+        let s = scene(&spec);
+        let params = Params {
+            n_segments: 500,
+            ..Params::default()
+        };
+        let seg = engine::segment(&s.image, &s.ends(), &params).unwrap();
+        assert_eq!(seg.width, 320);
+        // Masks drawn with the measured width against the true cable bodies.
+        let found = mask_of(&seg, 0.0);
+        assert_eq!(found.dimensions(), (320, 240));
+        let iou = eval::iou(&found, &s.mask);
+        ious.push(iou);
+        // A true cable is recovered when a found centreline runs within 3.5 px of it on average.
+        for cable in &s.cables {
+            let best = seg
+                .cables
+                .iter()
+                .map(|c| centreline_error(&cable.centreline, &c.polyline))
+                .fold(f32::MAX, f32::min);
+            eprintln!("seed {seed}: mean centreline distance {best:.2} px");
+            total += 1;
+            recovered += usize::from(best < 3.5);
+        }
+        for c in &seg.cables {
+            assert!(
+                (6.0..13.0).contains(&c.width_px),
+                "seed {seed}: width {}",
+                c.width_px
+            );
+        }
+    }
+    let mean = ious.iter().sum::<f64>() / ious.len() as f64;
+    eprintln!("synthetic: {recovered}/{total} cables recovered, mean IoU {mean:.3} ({ious:?})");
+    assert!(
+        recovered * 4 >= total * 3,
+        "only {recovered}/{total} cables recovered"
+    );
+    assert!(
+        mean > 0.55,
+        "mean IoU on synthetic scenes {mean:.3} ({ious:?})"
+    );
+}
+
+#[test]
+fn bad_parameters_and_ends_are_errors_not_panics() {
+    let s = scene(&SceneSpec {
+        width: 64,
+        height: 48,
+        cables: 1,
+        cable_width: 6.0,
+        background: Background::Plain,
+        seed: 5,
+    });
+    let p = Params::default();
+    assert!(matches!(
+        engine::segment(&s.image, &[[64.0, 10.0]], &p),
+        Err(engine::EngineError::EndpointOutside { index: 0, .. })
+    ));
+    assert!(matches!(
+        engine::segment(&s.image, &[[f64::NAN, 10.0]], &p),
+        Err(engine::EngineError::EndpointNotFinite { index: 0 })
+    ));
+    let bad = Params {
+        compactness: 0.0,
+        ..Params::default()
+    };
+    assert!(matches!(
+        engine::segment(&s.image, &[], &bad),
+        Err(engine::EngineError::InvalidParameter {
+            name: "compactness",
+            ..
+        })
+    ));
+    let tiny = image::RgbImage::new(8, 8);
+    assert!(matches!(
+        engine::segment(&tiny, &[], &p),
+        Err(engine::EngineError::ImageTooSmall { .. })
+    ));
+    // No ends: a valid, empty answer.
+    let seg = engine::segment(&s.image, &[], &p).unwrap();
+    assert!(seg.cables.is_empty());
+}
+
+/// Weighted IoU on the development split with the true ends. The floors are the
+/// measured values less a small margin (see README, Accuracy): they catch regressions.
+#[test]
+fn development_split_accuracy_floors() {
+    let dir = eval::default_dataset_dir();
+    let samples = eval::load_dataset(&dir)
+        .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
+    let simple = Params::preset("default").unwrap();
+    let hard = Params::preset("clutter").unwrap();
+    let results: Vec<eval::ImageResult> = samples
+        .iter()
+        .map(|s| eval::evaluate_sample(s, if s.set == "hard" { &hard } else { &simple }).unwrap())
+        .collect();
+    let sets = eval::summarise(&results);
+    let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;
+    let (simple_iou, hard_iou) = (get("simple"), get("hard"));
+    eprintln!("weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
+    assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");
+    assert!(hard_iou >= 0.60, "hard {hard_iou:.3}");
+}
