@@ -135,30 +135,10 @@ mod tests {
         ));
     }
 
-    fn crc32(data: &[u8]) -> u32 {
-        let mut crc = !0u32;
-        for &b in data {
-            crc ^= b as u32;
-            for _ in 0..8 {
-                crc = if crc & 1 == 1 {
-                    (crc >> 1) ^ 0xEDB8_8320
-                } else {
-                    crc >> 1
-                };
-            }
-        }
-        !crc
-    }
-
     #[test]
     fn huge_header_is_refused_without_decoding() {
         // A PNG header announcing 60000x60000 with no pixel data behind it.
-        let mut bytes = png_bytes(1, 1)[..33].to_vec();
-        bytes[16..20].copy_from_slice(&60000u32.to_be_bytes());
-        bytes[20..24].copy_from_slice(&60000u32.to_be_bytes());
-        // IHDR's CRC covers its type and data (bytes 12..29), stored at 29..33.
-        let crc = crc32(&bytes[12..29]);
-        bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+        let bytes = crate::synth::png_header_only(60000, 60000);
         assert_eq!(dimensions(&bytes).unwrap(), (60000, 60000));
         assert!(matches!(
             decode_rgb(&bytes, 1 << 24),

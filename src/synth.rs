@@ -42,6 +42,32 @@ pub fn noise_rgb(width: u32, height: u32, seed: u64) -> RgbImage {
     })
 }
 
+/// A PNG that is only a signature and an IHDR chunk (correct CRC) announcing
+/// `width` x `height` RGB pixels, with no pixel data: the "pixel bomb" a server must
+/// refuse from the header alone.
+pub fn png_header_only(width: u32, height: u32) -> Vec<u8> {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend_from_slice(&width.to_be_bytes());
+    ihdr.extend_from_slice(&height.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+    let mut crc = !0u32;
+    for &b in &ihdr {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    out.extend_from_slice(&13u32.to_be_bytes());
+    out.extend_from_slice(&ihdr);
+    out.extend_from_slice(&(!crc).to_be_bytes());
+    out
+}
+
 /// Background kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Background {

@@ -326,7 +326,7 @@ async fn bad_inputs_get_precise_json_errors_and_the_server_stays_up() {
     )
     .await;
     // Pixel bomb: a valid PNG header announcing 60000 x 60000.
-    let bomb = pixel_bomb();
+    let bomb = ariadne_dlo::synth::png_header_only(60000, 60000);
     expect_error(
         post(&q)
             .header("content-type", "image/png")
@@ -402,27 +402,14 @@ async fn bad_inputs_get_precise_json_errors_and_the_server_stays_up() {
     )
     .await;
     // Options: bad JSON, unknown field, out of range.
-    let f = form(photo(), Some(ends.clone())).text("options", "{not json");
-    expect_error(
-        post("").multipart(f).send().await.unwrap(),
-        400,
-        "bad_options",
-    )
-    .await;
-    let f = form(photo(), Some(ends.clone())).text("options", r#"{"segments": 5}"#);
-    expect_error(
-        post("").multipart(f).send().await.unwrap(),
-        400,
-        "bad_options",
-    )
-    .await;
-    let f = form(photo(), Some(ends.clone())).text("options", r#"{"n_segments": 0}"#);
-    expect_error(
-        post("").multipart(f).send().await.unwrap(),
-        422,
-        "option_out_of_range",
-    )
-    .await;
+    for (options, status, code) in [
+        ("{not json", 400, "bad_options"),
+        (r#"{"segments": 5}"#, 400, "bad_options"),
+        (r#"{"n_segments": 0}"#, 422, "option_out_of_range"),
+    ] {
+        let f = form(photo(), Some(ends.clone())).text("options", options);
+        expect_error(post("").multipart(f).send().await.unwrap(), status, code).await;
+    }
     // Wrong method, unknown route.
     expect_error(
         c.get(app.url("/segment")).send().await.unwrap(),
@@ -444,30 +431,6 @@ async fn bad_inputs_get_precise_json_errors_and_the_server_stays_up() {
         .await
         .unwrap();
     assert_eq!(ok.status(), 200);
-}
-
-/// A PNG whose header announces 60000 x 60000 pixels, with a correct CRC.
-fn pixel_bomb() -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend_from_slice(&60000u32.to_be_bytes());
-    ihdr.extend_from_slice(&60000u32.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-    let mut crc = !0u32;
-    for &b in &ihdr {
-        crc ^= b as u32;
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
-    out.extend_from_slice(&13u32.to_be_bytes());
-    out.extend_from_slice(&ihdr);
-    out.extend_from_slice(&(!crc).to_be_bytes());
-    out
 }
 
 /// A large photo (the dataset image scaled 3x) and options that make the work slow.

@@ -169,11 +169,17 @@ pub fn segment(
     let t = Instant::now();
     let mut cables = Vec::with_capacity(chosen.len());
     let mut end_cables = vec![None; ends.len()];
+    let scene = Scene {
+        walks: &walks,
+        seeds: &seeds,
+        graph: &graph,
+        sp: &sp,
+        lab: &lab,
+        image,
+        params,
+    };
     for choice in &chosen {
-        let walk = &walks[choice.walk];
-        let Some(mut cable) = model_cable(
-            choice, walk, &walks, &seeds, &graph, &sp, &lab, image, params,
-        ) else {
+        let Some(mut cable) = model_cable(&scene, choice) else {
             continue;
         };
         cable.id = cables.len();
@@ -198,20 +204,31 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// Everything the modelling of one cable reads: the earlier stages' results.
+#[derive(Clone, Copy)]
+struct Scene<'a> {
+    walks: &'a [Walk],
+    seeds: &'a [Seed],
+    graph: &'a Graph,
+    sp: &'a Superpixels,
+    lab: &'a LabImage,
+    image: &'a RgbImage,
+    params: &'a Params,
+}
+
 /// Builds the spline model of one chosen walk: data points from the walk, fit,
 /// refinement on the image, final fit and measurements.
-#[allow(clippy::too_many_arguments)]
-fn model_cable(
-    choice: &Pairing,
-    walk: &Walk,
-    joined_walks: &[Walk],
-    seeds: &[Seed],
-    graph: &Graph,
-    sp: &Superpixels,
-    lab: &LabImage,
-    image: &RgbImage,
-    params: &Params,
-) -> Option<Cable> {
+fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> {
+    let Scene {
+        walks,
+        seeds,
+        graph,
+        sp,
+        lab,
+        image,
+        params,
+    } = *scene;
+    let walk = &walks[choice.walk];
     let start = seeds[choice.start].point;
     let mut points = vec![start];
     let mut weights = vec![END_WEIGHT];
@@ -221,7 +238,7 @@ fn model_cable(
             .map(|&v| graph.vertices[v as usize].centroid),
     );
     if let Some(j) = choice.joined {
-        let other = &joined_walks[j];
+        let other = &walks[j];
         points.extend(
             other.vertices[1..]
                 .iter()
