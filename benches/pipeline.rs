@@ -85,6 +85,30 @@ fn superpixels_640x480(bencher: divan::Bencher) {
     });
 }
 
+/// SLIC alone (k-means and connectivity) on a prepared Lab image.
+#[divan::bench(sample_count = 30)]
+fn slic_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let img = &fx[0].image;
+    let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
+    lab.gaussian_blur(p.sigma);
+    bencher.bench_local(|| slic(&lab, &settings(&p)));
+}
+
+/// Lab conversion and blur alone.
+#[divan::bench(sample_count = 30)]
+fn lab_and_blur_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    bencher.bench_local(|| {
+        let img = &fx[0].image;
+        let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
+        lab.gaussian_blur(p.sigma);
+        lab
+    });
+}
+
 #[divan::bench(sample_count = 30)]
 fn graph_640x480(bencher: divan::Bencher) {
     let fx = fixtures();

@@ -71,18 +71,19 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
         }
     }
     // Initial labels: the grid cell, so that a pixel no window reaches still has one.
-    let mut labels: Vec<u32> = (0..n)
-        .map(|p| {
-            let (x, y) = (p % w, p / w);
-            let i = ((x as f32 / cw) as usize).min(nx - 1);
-            let j = ((y as f32 / ch) as usize).min(ny - 1);
-            (j * nx + i) as u32
-        })
+    let column: Vec<u32> = (0..w)
+        .map(|x| ((x as f32 / cw) as usize).min(nx - 1) as u32)
         .collect();
+    let mut labels = Vec::with_capacity(n);
+    for y in 0..h {
+        let j = ((y as f32 / ch) as usize).min(ny - 1) as u32;
+        labels.extend(column.iter().map(|&i| j * nx as u32 + i));
+    }
     let mut dist = vec![f32::INFINITY; n];
     let spatial = (s.compactness / step).powi(2);
     let radius = step.ceil() as isize;
     let mut sums = vec![[0.0f64; 6]; centres.len()];
+    let mut dx2 = Vec::with_capacity(2 * radius as usize + 1);
 
     for _ in 0..s.iterations {
         dist.fill(f32::INFINITY);
@@ -94,56 +95,27 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
             if x0 >= x1 || y0 >= y1 {
                 continue;
             }
+            dx2.clear();
+            dx2.extend((x0..x1).map(|x| (x as f32 - c.x).powi(2) * spatial));
             for y in y0..y1 {
-                let dy = y as f32 - c.y;
-                let dy2 = dy * dy * spatial;
-                let row = y * w;
-                let range = row + x0..row + x1;
-                let (pl, pa, pb) = (
-                    &lab.l[range.clone()],
-                    &lab.a[range.clone()],
-                    &lab.b[range.clone()],
+                let dy2 = (y as f32 - c.y).powi(2) * spatial;
+                let range = y * w + x0..y * w + x1;
+                assign_row(
+                    RowPlanes {
+                        l: &lab.l[range.clone()],
+                        a: &lab.a[range.clone()],
+                        b: &lab.b[range.clone()],
+                        dx2: &dx2,
+                    },
+                    c,
+                    dy2,
+                    k as u32,
+                    &mut dist[range.clone()],
+                    &mut labels[range],
                 );
-                let pd = &mut dist[range.clone()];
-                let plab = &mut labels[range];
-                let base_dx = x0 as f32 - c.x;
-                for i in 0..pd.len() {
-                    let dl = pl[i] - c.l;
-                    let da = pa[i] - c.a;
-                    let db = pb[i] - c.b;
-                    let dx = base_dx + i as f32;
-                    let d = dl * dl + da * da + db * db + dx * dx * spatial + dy2;
-                    let better = d < pd[i];
-                    pd[i] = if better { d } else { pd[i] };
-                    plab[i] = if better { k as u32 } else { plab[i] };
-                }
             }
         }
-        sums.iter_mut().for_each(|s| *s = [0.0; 6]);
-        for y in 0..h {
-            let mut row_sums_label = u32::MAX;
-            let mut acc = [0.0f64; 6];
-            for x in 0..w {
-                let p = y * w + x;
-                let k = labels[p];
-                if k != row_sums_label {
-                    if row_sums_label != u32::MAX {
-                        add(&mut sums[row_sums_label as usize], &acc);
-                    }
-                    row_sums_label = k;
-                    acc = [0.0; 6];
-                }
-                acc[0] += lab.l[p] as f64;
-                acc[1] += lab.a[p] as f64;
-                acc[2] += lab.b[p] as f64;
-                acc[3] += x as f64;
-                acc[4] += y as f64;
-                acc[5] += 1.0;
-            }
-            if row_sums_label != u32::MAX {
-                add(&mut sums[row_sums_label as usize], &acc);
-            }
-        }
+        accumulate(lab, &labels, &mut sums);
         for (c, s) in centres.iter_mut().zip(&sums) {
             if s[5] > 0.0 {
                 let inv = 1.0 / s[5];
@@ -168,9 +140,64 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
     }
 }
 
-fn add(sum: &mut [f64; 6], acc: &[f64; 6]) {
-    for (s, a) in sum.iter_mut().zip(acc) {
-        *s += a;
+/// One window row of the Lab planes and the squared, weighted x offsets from the centre.
+struct RowPlanes<'a> {
+    l: &'a [f32],
+    a: &'a [f32],
+    b: &'a [f32],
+    dx2: &'a [f32],
+}
+
+/// Assigns the pixels of one window row to centre `k` where it is nearer than their
+/// current best. Zipped slices and a branch-free select let the compiler vectorise it.
+#[inline]
+fn assign_row(
+    row: RowPlanes<'_>,
+    c: &Centre,
+    dy2: f32,
+    k: u32,
+    dist: &mut [f32],
+    labels: &mut [u32],
+) {
+    let pixels = row.l.iter().zip(row.a).zip(row.b).zip(row.dx2);
+    for ((((&l, &a), &b), &dx2), (d_best, label)) in pixels.zip(dist.iter_mut().zip(labels)) {
+        let (dl, da, db) = (l - c.l, a - c.a, b - c.b);
+        let d = dl * dl + da * da + db * db + dx2 + dy2;
+        let better = d < *d_best;
+        let mask = (better as u32).wrapping_neg();
+        *d_best = if better { d } else { *d_best };
+        *label = (*label & !mask) | (k & mask);
+    }
+}
+
+/// Per-label sums of L, a, b, x, y and pixel count. Labels come in runs along a row,
+/// so colour is summed in f32 per run and x from the run's bounds.
+fn accumulate(lab: &LabImage, labels: &[u32], sums: &mut [[f64; 6]]) {
+    sums.iter_mut().for_each(|s| *s = [0.0; 6]);
+    let w = lab.width;
+    for y in 0..lab.height {
+        let row = y * w..(y + 1) * w;
+        let (rl, ra, rb) = (
+            &lab.l[row.clone()],
+            &lab.a[row.clone()],
+            &lab.b[row.clone()],
+        );
+        let labels = &labels[row];
+        let mut start = 0;
+        while start < w {
+            let k = labels[start];
+            let end = start + labels[start..].iter().take_while(|&&l| l == k).count();
+            let sum = |plane: &[f32]| plane[start..end].iter().sum::<f32>() as f64;
+            let count = (end - start) as f64;
+            let s = &mut sums[k as usize];
+            s[0] += sum(rl);
+            s[1] += sum(ra);
+            s[2] += sum(rb);
+            s[3] += (start + end - 1) as f64 * count / 2.0;
+            s[4] += y as f64 * count;
+            s[5] += count;
+            start = end;
+        }
     }
 }
 
