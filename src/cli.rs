@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use thiserror::Error;
 
 use crate::decode::{DecodeError, decode_rgb};
+use crate::detect::{DetectError, DetectorArgs, Ends, OnnxDetector};
 use crate::engine::{self, EngineError, MaskKind, Params, render};
 use crate::eval::{self, DatasetError, ImageResult};
 use crate::report::{self, CableReport, SegmentResponse, Timings};
@@ -79,6 +80,9 @@ pub struct SegmentArgs {
     /// Write the photo with the curves drawn on it here (PNG).
     #[arg(long)]
     pub overlay: Option<PathBuf>,
+    /// The endpoint detector, used when --endpoints is not given.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
 }
 
 /// Where `eval` takes the cable ends from.
@@ -86,6 +90,8 @@ pub struct SegmentArgs {
 pub enum EndsSource {
     /// The true terminals: ends of the annotated centrelines not on the border.
     Gt,
+    /// The endpoint detector's.
+    Detect,
 }
 
 /// Arguments of `ariadne eval`.
@@ -109,6 +115,9 @@ pub struct EvalArgs {
     /// Print one JSON document instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// The endpoint detector, used with --endpoints detect.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
 }
 
 /// Errors of the command line, each with the message a person needs.
@@ -117,11 +126,9 @@ pub enum CliError {
     /// Bad --endpoints.
     #[error("--endpoints must be a JSON array of [x, y] pairs: {0}")]
     BadEndpoints(String),
-    /// No ends and no detector yet.
-    #[error(
-        "cable ends are required: pass --endpoints '[[x,y],...]' (automatic detection is not available yet)"
-    )]
-    EndsRequired,
+    /// The endpoint detector.
+    #[error("endpoint detector: {0}")]
+    Detect(#[from] DetectError),
     /// Bad --options.
     #[error("--options must be a JSON object of parameter overrides: {0}")]
     BadOptions(String),
@@ -158,11 +165,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     }
 }
 
-/// Parses `[[x, y], ...]` with integer or fractional numbers.
-pub fn parse_endpoints(text: &str) -> Result<Vec<[f64; 2]>, String> {
-    serde_json::from_str::<Vec<[f64; 2]>>(text).map_err(|e| e.to_string())
-}
-
 fn params_from(preset: &str, options: Option<&str>) -> Result<Params, CliError> {
     let base = Params::preset(preset)?;
     match options {
@@ -188,15 +190,19 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
 fn segment(args: &SegmentArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let params = params_from(&args.preset, args.options.as_deref())?;
-    let ends = match &args.endpoints {
-        Some(text) => parse_endpoints(text).map_err(CliError::BadEndpoints)?,
-        None => return Err(CliError::EndsRequired),
+    let given = match &args.endpoints {
+        Some(text) => Some(report::parse_endpoints(text).map_err(CliError::BadEndpoints)?),
+        None => None,
     };
     let bytes = std::fs::read(&args.image).map_err(|e| CliError::Io(args.image.clone(), e))?;
     let t = std::time::Instant::now();
     let image = decode_rgb(&bytes, u64::MAX).map_err(|e| CliError::Image(args.image.clone(), e))?;
     let decode = t.elapsed().as_secs_f64() * 1e3;
-    let seg = engine::segment(&image, &ends, &params)?;
+    let ends = match given {
+        Some(points) => Ends::given(points),
+        None => Ends::detected(&OnnxDetector::load(&args.detector, 1)?, &image)?,
+    };
+    let seg = engine::segment(&image, &ends.points, &params)?;
     let t = std::time::Instant::now();
     let mask = render::render_mask(&seg, args.mask_kind.into(), params.mask_width_px);
     let overlay = args.overlay.as_ref().map(|_| render::overlay(&image, &seg));
@@ -223,11 +229,12 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
             width: seg.width,
             height: seg.height,
             cables: seg.cables.iter().map(CableReport::from).collect(),
-            endpoints: report::endpoint_reports(&seg, &ends, &[]),
+            endpoints: report::endpoint_reports(&seg, &ends.points, &ends.confidences),
             mask_png: report::base64(&mask_png),
             overlay_png: overlay_png.as_deref().map(report::base64),
             timings_ms: Timings {
                 decode,
+                endpoints: ends.detect_ms,
                 mask: mask_time,
                 ..Timings::default()
             }
@@ -243,7 +250,7 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
     eprintln!(
         "{} cable(s) from {} end(s) in {:.1} ms",
         seg.cables.len(),
-        ends.len(),
+        ends.points.len(),
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(())
@@ -257,14 +264,23 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
     let samples = eval::load_dataset(&dir)?;
     let simple = params_from(&args.preset, args.options.as_deref())?;
     let hard = params_from(&args.hard_preset, args.options.as_deref())?;
-    let EndsSource::Gt = args.endpoints;
+    let detector = match args.endpoints {
+        EndsSource::Gt => None,
+        EndsSource::Detect => Some(OnnxDetector::load(&args.detector, 1)?),
+    };
     let mut results: Vec<ImageResult> = Vec::with_capacity(samples.len());
     for sample in &samples {
         let params = if sample.set == "hard" { &hard } else { &simple };
-        let r = eval::evaluate_sample(sample, params)?;
+        let r = eval::evaluate_sample(
+            sample,
+            params,
+            detector
+                .as_ref()
+                .map(|d| d as &dyn crate::detect::EndpointDetector),
+        )?;
         if !args.json {
             println!(
-                "{:<7} {}  IoU {:.3}  cables {}/{} found {}  ends {}  ms: sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
+                "{:<7} {}  IoU {:.3}  cables {}/{} found {}  ends {} ({}/{} terminals)  ms: ends {:.1} sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
                 r.set,
                 r.name,
                 r.iou,
@@ -272,6 +288,9 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
                 r.gt_cables,
                 r.found_cables,
                 r.ends,
+                r.terminals_matched,
+                r.terminals,
+                r.timings_ms.endpoints,
                 r.timings_ms.superpixels,
                 r.timings_ms.graph,
                 r.timings_ms.walks,
@@ -289,17 +308,19 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
     } else {
         println!();
         println!(
-            "set      images  weighted IoU  cable recall  cable precision  matched IoU  median ms"
+            "set      images  weighted IoU  cable recall  cable precision  matched IoU  end recall  end precision  median ms"
         );
         for s in &summaries {
             println!(
-                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>9.1}",
+                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>10.3}  {:>13.3}  {:>9.1}",
                 s.set,
                 s.images,
                 s.weighted_iou,
                 s.cable_recall,
                 s.cable_precision,
                 s.matched_iou,
+                s.terminal_recall,
+                s.terminal_precision,
                 s.median_total_ms
             );
         }

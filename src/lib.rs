@@ -3,6 +3,7 @@
 //! "Let's take a Walk on Superpixels Graphs" (ACCV 2018).
 //!
 //! - [`decode`]: image decoding with header-checked limits;
+//! - [`detect`]: cable-end detection with an ONNX model;
 //! - [`engine`]: the pure algorithm (SLIC → graph → walks → pairing → splines → masks);
 //! - [`http`]: the HTTP service (axum) around the engine;
 //! - [`eval`]: dataset reading and the paper's metrics;
@@ -11,6 +12,7 @@
 
 pub mod cli;
 pub mod decode;
+pub mod detect;
 pub mod engine;
 pub mod eval;
 pub mod http;

@@ -128,6 +128,11 @@ impl From<&Cable> for CableReport {
     }
 }
 
+/// Parses cable ends given as JSON `[[x, y], ...]` (integer or fractional numbers).
+pub fn parse_endpoints(text: &str) -> Result<Vec<[f64; 2]>, String> {
+    serde_json::from_str::<Vec<[f64; 2]>>(text).map_err(|e| e.to_string())
+}
+
 /// Reports every end of `ends` with its confidence and the cable `seg` assigned it to.
 pub fn endpoint_reports(
     seg: &Segmentation,

@@ -3,8 +3,10 @@
 #![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
 
 use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
+use ariadne_dlo::detect::{EndpointDetector, OnnxDetector};
 use ariadne_dlo::http::{self, AppState, Presets, ServeArgs};
 use clap::Parser;
 use reqwest::multipart::{Form, Part};
@@ -44,7 +46,7 @@ async fn spawn_app_with(flags: &[&str], warm: bool) -> TestApp {
     }
     argv.extend_from_slice(flags);
     let config = Wrapper::parse_from(argv).args;
-    let state = AppState::new(config, Presets::default()).unwrap();
+    let state = AppState::new(config, Presets::default(), detector()).unwrap();
     if warm {
         http::warm_up(&state).await.unwrap();
     }
@@ -60,6 +62,17 @@ async fn spawn_app_with(flags: &[&str], warm: bool) -> TestApp {
         shutdown: Some(tx),
         server,
     }
+}
+
+/// The bundled model through ONNX Runtime, loaded once for all tests of this binary.
+fn detector() -> Arc<dyn EndpointDetector> {
+    static DETECTOR: OnceLock<Arc<OnnxDetector>> = OnceLock::new();
+    DETECTOR
+        .get_or_init(|| {
+            let args = Wrapper::parse_from(["test"]).args.detector;
+            Arc::new(OnnxDetector::load(&args, 2).expect("bundled model (run `make setup`)"))
+        })
+        .clone()
 }
 
 async fn spawn_app(flags: &[&str]) -> TestApp {
@@ -197,6 +210,43 @@ async fn multipart_json_happy_path() {
         body["timings_ms"]["total"].as_f64().unwrap()
             >= body["timings_ms"]["superpixels"].as_f64().unwrap()
     );
+}
+
+/// No ends in the request: the bundled detector finds them, and every reported end
+/// carries its confidence and cable.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_photo_alone_is_segmented_with_detected_ends() {
+    let app = spawn_app(&[]).await;
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .header("content-type", "image/jpeg")
+        .body(photo())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: Value = response.json().await.unwrap();
+    let ends = body["endpoints"].as_array().unwrap();
+    let truth: Vec<[f64; 2]> = serde_json::from_str(&ends_json()).unwrap();
+    let found: Vec<[f64; 2]> = ends
+        .iter()
+        .map(|e| serde_json::from_value(e["point"].clone()).unwrap())
+        .collect();
+    let matched = ariadne_dlo::eval::match_points(&found, &truth, 15.0);
+    assert!(
+        matched * 10 >= truth.len() * 7,
+        "{matched} of {} terminals detected: {found:?}",
+        truth.len()
+    );
+    for e in ends {
+        let c = e["confidence"].as_f64().unwrap();
+        assert!(c > 0.0 && c <= 1.0, "confidence {c}");
+    }
+    let cables = body["cables"].as_array().unwrap();
+    assert!(cables.len() >= 4, "{} cables", cables.len());
+    assert!(ends.iter().filter(|e| e["cable"].is_u64()).count() >= 4);
+    assert!(body["timings_ms"]["endpoints"].as_f64().unwrap() > 0.0);
 }
 
 #[tokio::test(flavor = "multi_thread")]
@@ -369,16 +419,6 @@ async fn bad_inputs_get_precise_json_errors_and_the_server_stays_up() {
     )
     .await;
     assert!(body["error"]["message"].as_str().unwrap().contains("#1"));
-    expect_error(
-        post("")
-            .multipart(form(photo(), None))
-            .send()
-            .await
-            .unwrap(),
-        422,
-        "endpoints_required",
-    )
-    .await;
     // Bad query values.
     for bad in [
         "?mask=rainbow",

@@ -139,7 +139,9 @@ fn development_split_accuracy_floors() {
     let hard = Params::preset("clutter").unwrap();
     let results: Vec<eval::ImageResult> = samples
         .iter()
-        .map(|s| eval::evaluate_sample(s, if s.set == "hard" { &hard } else { &simple }).unwrap())
+        .map(|s| {
+            eval::evaluate_sample(s, if s.set == "hard" { &hard } else { &simple }, None).unwrap()
+        })
         .collect();
     let sets = eval::summarise(&results);
     let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;

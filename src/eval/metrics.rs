@@ -62,8 +62,33 @@ pub struct SetSummary {
     pub cable_precision: f64,
     /// Mean IoU of the matched cables (alignment of the curves that were found).
     pub matched_iou: f64,
+    /// Matched / true terminals.
+    pub terminal_recall: f64,
+    /// Matched terminals / ends used.
+    pub terminal_precision: f64,
     /// Median total milliseconds per image.
     pub median_total_ms: f64,
+}
+
+/// Number of `found` points matched one-to-one to a `truth` point within `radius`,
+/// taking `found` in order (most confident first) and each its nearest free truth.
+pub fn match_points(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> usize {
+    let mut used = vec![false; truth.len()];
+    let mut matched = 0;
+    for f in found {
+        let nearest = truth
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| !used[*j])
+            .map(|(j, t)| (j, (t[0] - f[0]).hypot(t[1] - f[1])))
+            .filter(|&(_, d)| d <= radius)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((j, _)) = nearest {
+            used[j] = true;
+            matched += 1;
+        }
+    }
+    matched
 }
 
 /// Summaries per set, in first-seen order.
@@ -83,6 +108,9 @@ pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
             let matched_iou: f64 =
                 rs.iter().map(|r| r.matched_iou_sum).sum::<f64>() / matched.max(1) as f64;
             let weighted: f64 = rs.iter().map(|r| r.gt_cables as f64 * r.iou).sum();
+            let terminals: usize = rs.iter().map(|r| r.terminals).sum();
+            let ends: usize = rs.iter().map(|r| r.ends).sum();
+            let hits: usize = rs.iter().map(|r| r.terminals_matched).sum();
             let mut totals: Vec<f64> = rs.iter().map(|r| r.timings_ms.total).collect();
             totals.sort_by(f64::total_cmp);
             SetSummary {
@@ -91,6 +119,8 @@ pub fn summarise(results: &[ImageResult]) -> Vec<SetSummary> {
                 cable_recall: matched as f64 / cables.max(1) as f64,
                 cable_precision: matched as f64 / found.max(1) as f64,
                 matched_iou,
+                terminal_recall: hits as f64 / terminals.max(1) as f64,
+                terminal_precision: hits as f64 / ends.max(1) as f64,
                 median_total_ms: totals.get(totals.len() / 2).copied().unwrap_or(0.0),
                 set,
             }
@@ -107,6 +137,15 @@ mod tests {
         GrayImage::from_fn(10, 10, |x, _| {
             Luma([if (x0..x1).contains(&x) { 255 } else { 0 }])
         })
+    }
+
+    #[test]
+    fn points_match_one_to_one_within_the_radius() {
+        let truth = [[0.0, 0.0], [100.0, 0.0]];
+        assert_eq!(match_points(&[[3.0, 4.0], [1.0, 0.0]], &truth, 15.0), 1);
+        assert_eq!(match_points(&[[3.0, 4.0], [90.0, 0.0]], &truth, 15.0), 2);
+        assert_eq!(match_points(&[[20.0, 0.0]], &truth, 15.0), 0);
+        assert_eq!(match_points(&[], &truth, 15.0), 0);
     }
 
     #[test]

@@ -5,14 +5,18 @@ mod dataset;
 mod metrics;
 
 pub use dataset::{DatasetError, Sample, default_dataset_dir, load_dataset, terminal_ends};
-pub use metrics::{SetSummary, iou, match_cables, summarise};
+pub use metrics::{SetSummary, iou, match_cables, match_points, summarise};
 
 use std::time::Instant;
 
 use image::GrayImage;
 use serde::Serialize;
 
+use crate::detect::{EndpointDetector, Ends};
 use crate::engine::{self, Params, render};
+
+/// Distance within which a detected end matches a true terminal (the 15 px).
+pub const TERMINAL_MATCH_PX: f64 = 15.0;
 
 /// Result on one image.
 #[derive(Debug, Clone, Serialize)]
@@ -33,6 +37,10 @@ pub struct ImageResult {
     pub iou: f64,
     /// Ends given to the engine.
     pub ends: usize,
+    /// True terminals (centreline ends off the border).
+    pub terminals: usize,
+    /// Ends within [`TERMINAL_MATCH_PX`] of a true terminal, one-to-one.
+    pub terminals_matched: usize,
     /// Milliseconds per stage: decode, superpixels, graph, walks, splines, mask, total.
     pub timings_ms: StageMs,
 }
@@ -42,6 +50,8 @@ pub struct ImageResult {
 pub struct StageMs {
     /// JPEG decoding.
     pub decode: f64,
+    /// Endpoint detection (0 with the true ends).
+    pub endpoints: f64,
     /// Colour conversion, blur, SLIC.
     pub superpixels: f64,
     /// Region adjacency graph.
@@ -59,15 +69,26 @@ pub struct StageMs {
 /// Per-cable IoU at or above which a found cable counts as matching a true one.
 pub const MATCH_IOU: f64 = 0.5;
 
-/// Segments `sample` with its true terminal ends and scores it.
-pub fn evaluate_sample(sample: &Sample, params: &Params) -> Result<ImageResult, DatasetError> {
+/// Segments `sample` with ends from `detector`, or its true terminal ends when there is
+/// none, and scores it.
+pub fn evaluate_sample(
+    sample: &Sample,
+    params: &Params,
+    detector: Option<&dyn EndpointDetector>,
+) -> Result<ImageResult, DatasetError> {
     let t0 = Instant::now();
     let bytes = std::fs::read(&sample.image).map_err(|e| DatasetError::io(&sample.image, e))?;
     let image = crate::decode::decode_rgb(&bytes, u64::MAX)
         .map_err(|e| DatasetError::Image(sample.image.clone(), e.to_string()))?;
     let decode = ms(t0);
     let (w, h) = image.dimensions();
-    let ends = terminal_ends(&sample.cables, w, h);
+    let terminals = terminal_ends(&sample.cables, w, h);
+    let ends = match detector {
+        Some(d) => Ends::detected(d, &image)
+            .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?,
+        None => Ends::given(terminals.clone()),
+    };
+    let (endpoints, ends) = (ends.detect_ms, ends.points);
     let seg = engine::segment(&image, &ends, params)
         .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
     let t = Instant::now();
@@ -94,8 +115,11 @@ pub fn evaluate_sample(sample: &Sample, params: &Params) -> Result<ImageResult, 
         matched_iou_sum,
         iou: iou(&pred, &gt_all),
         ends: ends.len(),
+        terminals: terminals.len(),
+        terminals_matched: match_points(&ends, &terminals, TERMINAL_MATCH_PX),
         timings_ms: StageMs {
             decode,
+            endpoints,
             superpixels: seg.timings.superpixels,
             graph: seg.timings.graph,
             walks: seg.timings.walks,

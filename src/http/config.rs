@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use clap::ValueEnum;
 
+use crate::detect::DetectorArgs;
 use crate::engine::{EngineError, PRESET_NAMES, Params};
 
 /// Log line format.
@@ -54,6 +55,9 @@ pub struct ServeArgs {
     /// Seconds in-flight requests get to finish after the listener closes.
     #[arg(long, env = "ARIADNE_SHUTDOWN_GRACE_S", default_value_t = 30)]
     pub shutdown_grace_s: u64,
+    /// The endpoint detector, run when a request gives no ends.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
 }
 
 impl ServeArgs {

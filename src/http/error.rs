@@ -7,6 +7,7 @@ use serde::Serialize;
 use utoipa::ToSchema;
 
 use crate::decode::DecodeError;
+use crate::detect::DetectError;
 use crate::engine::EngineError;
 
 /// Everything a request can fail with; each variant maps to exactly one status.
@@ -131,6 +132,12 @@ impl From<DecodeError> for ApiError {
                 message: e.to_string(),
             },
         }
+    }
+}
+
+impl From<DetectError> for ApiError {
+    fn from(e: DetectError) -> Self {
+        Self::Internal(format!("endpoint detection: {e}"))
     }
 }
 

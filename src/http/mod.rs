@@ -32,6 +32,8 @@ pub use config::{LogFormat, Presets, ServeArgs};
 pub use error::ApiError;
 use pool::WorkerPool;
 
+use crate::detect::{EndpointDetector, OnnxDetector};
+
 /// Shared state of the service: configuration, presets, the pool and the life-cycle
 /// flags. Cheap to clone.
 #[derive(Clone)]
@@ -45,6 +47,8 @@ pub struct Inner {
     pub presets: Presets,
     /// Where CPU work runs.
     pub pool: WorkerPool,
+    /// Finds ends when a request gives none.
+    pub detector: Arc<dyn EndpointDetector>,
     /// True once warmed up.
     pub ready: AtomicBool,
     /// True once shutdown has begun.
@@ -60,12 +64,17 @@ impl Deref for AppState {
 
 impl AppState {
     /// State for `config`: presets loaded, pool started, not yet ready.
-    pub fn new(config: ServeArgs, presets: Presets) -> std::io::Result<Self> {
+    pub fn new(
+        config: ServeArgs,
+        presets: Presets,
+        detector: Arc<dyn EndpointDetector>,
+    ) -> std::io::Result<Self> {
         let pool = WorkerPool::new(config.worker_count(), config.queue)?;
         Ok(Self(Arc::new(Inner {
             config,
             presets,
             pool,
+            detector,
             ready: AtomicBool::new(false),
             draining: AtomicBool::new(false),
         })))
@@ -177,8 +186,8 @@ fn preset_label(state: &AppState, query: Option<&str>) -> String {
     }
 }
 
-/// Runs one small segmentation on the pool so that the first real request does not pay
-/// for lazy initialisation, then marks the service ready.
+/// Runs one small detection and segmentation on the pool so that the first real request
+/// does not pay for lazy initialisation, then marks the service ready.
 pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
     let spec = crate::synth::SceneSpec {
         width: 160,
@@ -189,11 +198,17 @@ pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
         seed: 1,
     };
     let params = state.presets.get("default").cloned().unwrap_or_default();
+    let detector = state.detector.clone();
     let job = state
         .pool
-        .try_submit(move || {
+        .try_submit(move || -> Result<usize, ApiError> {
             let scene = crate::synth::scene(&spec);
-            crate::engine::segment(&scene.image, &scene.ends(), &params).map(|s| s.cables.len())
+            detector.detect(&scene.image)?;
+            Ok(
+                crate::engine::segment(&scene.image, &scene.ends(), &params)?
+                    .cables
+                    .len(),
+            )
         })
         .map_err(|_| ApiError::Internal("pool full during warm-up".into()))?;
     let started = job
@@ -282,16 +297,20 @@ pub fn init_logging(format: LogFormat) {
     };
 }
 
-/// `ariadne serve`: load presets, start the pool, bind, warm up, serve until a signal.
+/// `ariadne serve`: load presets and the detector (a bad model stops it here), start
+/// the pool, bind, warm up, serve until a signal.
 pub fn run(config: ServeArgs) -> Result<(), String> {
     init_logging(config.log_format);
     let presets = Presets::load(config.presets.as_deref()).map_err(|e| e.to_string())?;
+    let detector = OnnxDetector::load(&config.detector, config.worker_count())
+        .map_err(|e| format!("endpoint detector: {e}"))?;
+    tracing::info!(model = %config.detector.model.display(), ?detector, "endpoint detector loaded");
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
         .map_err(|e| format!("cannot start the async runtime: {e}"))?;
     runtime.block_on(async move {
-        let state = AppState::new(config.clone(), presets)
+        let state = AppState::new(config.clone(), presets, Arc::new(detector))
             .map_err(|e| format!("cannot start workers: {e}"))?;
         let listener = TcpListener::bind(config.bind)
             .await

@@ -1,5 +1,6 @@
 //! `POST /segment`: parse the request, run the work in the pool, answer.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use axum::body::Bytes;
@@ -14,9 +15,10 @@ use super::AppState;
 use super::error::{ApiError, ErrorBody};
 use super::metrics;
 use super::request_id::RequestId;
+use crate::decode;
+use crate::detect::{EndpointDetector, Ends};
 use crate::engine::{self, MaskKind, Params, render};
 use crate::report::{self, CableReport, SegmentResponse, Timings};
-use crate::{cli, decode};
 
 /// Query parameters of `POST /segment`.
 #[derive(Debug, Default, Deserialize, IntoParams)]
@@ -72,7 +74,9 @@ pub struct ImageBytes(Vec<u8>);
 /// Everything parsed from one request, ready for a worker.
 struct Job {
     image: Bytes,
-    ends: Vec<[f64; 2]>,
+    /// The caller's ends; `None` runs the detector.
+    ends: Option<Vec<[f64; 2]>>,
+    detector: Arc<dyn EndpointDetector>,
     params: Params,
     mask: MaskKind,
     overlay: bool,
@@ -108,7 +112,7 @@ enum Output {
         (status = 400, description = "Malformed request: no image part, bad JSON in a part, bad query value", body = ErrorBody),
         (status = 413, description = "Body or pixel count over the limit", body = ErrorBody),
         (status = 415, description = "Not JPEG, PNG or multipart", body = ErrorBody),
-        (status = 422, description = "Undecodable or truncated image, ends missing or outside the image, options out of range", body = ErrorBody),
+        (status = 422, description = "Undecodable or truncated image, ends outside the image, options out of range", body = ErrorBody),
         (status = 429, description = "Queue full; see Retry-After", body = ErrorBody),
         (status = 500, description = "Bug; the server stays up", body = ErrorBody),
         (status = 504, description = "Deadline exceeded", body = ErrorBody),
@@ -137,18 +141,13 @@ pub async fn segment(
         ));
     }
     let ends = match part_ends.or(query.endpoints) {
-        Some(text) => cli::parse_endpoints(&text).map_err(|e| {
+        Some(text) => Some(report::parse_endpoints(&text).map_err(|e| {
             ApiError::bad_request(
                 "bad_endpoints",
                 format!("endpoints must be a JSON array of [x, y] pairs: {e}"),
             )
-        })?,
-        None => {
-            return Err(ApiError::Unprocessable {
-                code: "endpoints_required",
-                message: "cable ends are required: pass `endpoints` as a form part or query parameter, JSON [[x, y], ...] (automatic detection is not available yet)".into(),
-            });
-        }
+        })?),
+        None => None,
     };
     let preset = query.preset.as_deref().unwrap_or("default");
     let base = state.presets.get(preset).ok_or_else(|| {
@@ -177,11 +176,14 @@ pub async fn segment(
         }
         .into());
     }
-    engine::validate_ends(&ends, w, h)?;
+    if let Some(ends) = &ends {
+        engine::validate_ends(ends, w, h)?;
+    }
 
     let job = Job {
         image,
         ends,
+        detector: state.detector.clone(),
         params,
         mask: query.mask.unwrap_or_default(),
         overlay: query.overlay.unwrap_or(false),
@@ -357,7 +359,11 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
     let t = Instant::now();
     let image = decode::decode_rgb(&job.image, max_pixels)?;
     let decode_ms = ms(t);
-    let seg = engine::segment(&image, &job.ends, &job.params)?;
+    let ends = match job.ends {
+        Some(points) => Ends::given(points),
+        None => Ends::detected(job.detector.as_ref(), &image)?,
+    };
+    let seg = engine::segment(&image, &ends.points, &job.params)?;
     let t = Instant::now();
     let mask = render::render_mask(&seg, job.mask, job.params.mask_width_px);
     let overlay = job.overlay.then(|| render::overlay(&image, &seg));
@@ -383,11 +389,12 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
                 width: seg.width,
                 height: seg.height,
                 cables: seg.cables.iter().map(CableReport::from).collect(),
-                endpoints: report::endpoint_reports(&seg, &job.ends, &[]),
+                endpoints: report::endpoint_reports(&seg, &ends.points, &ends.confidences),
                 mask_png: report::base64(&mask_png),
                 overlay_png,
                 timings_ms: Timings {
                     decode: decode_ms,
+                    endpoints: ends.detect_ms,
                     mask: mask_ms,
                     encode: ms(t),
                     ..Timings::default()
@@ -398,6 +405,7 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
     };
     for (name, value) in [
         ("decode", decode_ms),
+        ("endpoints", ends.detect_ms),
         ("superpixels", seg.timings.superpixels),
         ("graph", seg.timings.graph),
         ("walks", seg.timings.walks),

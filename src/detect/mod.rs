@@ -1,0 +1,152 @@
+//! Cable-end detection: a keypoint network run through ONNX Runtime finds the ends the
+//! engine's walks start from, so a photo alone is enough.
+//!
+//! - [`output`]: decoding of heatmap and YOLO outputs (pure, tested on hand-made tensors);
+//! - [`OnnxDetector`]: ONNX Runtime loaded from a shared library at start-up, one session
+//!   per worker.
+
+mod onnx;
+pub mod output;
+
+use std::path::PathBuf;
+
+use clap::ValueEnum;
+use image::RgbImage;
+
+pub use onnx::{OnnxDetector, default_runtime_candidates};
+
+/// One detected end, photo pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Detection {
+    /// Position `[x, y]`.
+    pub point: [f64; 2],
+    /// Model confidence in 0..=1.
+    pub confidence: f32,
+}
+
+/// Finds cable ends in a photo.
+pub trait EndpointDetector: Send + Sync {
+    /// The ends in `image`, most confident first.
+    fn detect(&self, image: &RgbImage) -> Result<Vec<Detection>, DetectError>;
+}
+
+/// Errors loading or running a detector.
+#[derive(Debug, thiserror::Error)]
+pub enum DetectError {
+    /// ONNX Runtime's shared library is missing or unusable.
+    #[error("ONNX Runtime: {0}")]
+    Runtime(String),
+    /// The model file is missing, unreadable or not a valid model.
+    #[error("model {path}: {message}")]
+    Model {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// Inference failed.
+    #[error("inference failed: {0}")]
+    Inference(String),
+    /// The model's output has an unexpected shape.
+    #[error("unexpected model output: {0}")]
+    Output(String),
+}
+
+/// The output convention of a model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModelKind {
+    /// Keypoint heatmap `[1, 1 or 3, H/s, W/s]` (the bundled model).
+    Heatmap,
+    /// Ultralytics YOLO detections `[1, 4 + classes, N]`; box centres become ends.
+    Yolo,
+}
+
+/// Detector settings, shared by `ariadne serve`, `segment` and `eval`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DetectorArgs {
+    /// ONNX model of cable ends.
+    #[arg(long, env = "ARIADNE_MODEL", default_value = "models/endpoints.onnx")]
+    pub model: PathBuf,
+    /// Output convention of the model.
+    #[arg(
+        long,
+        env = "ARIADNE_MODEL_KIND",
+        value_enum,
+        default_value = "heatmap"
+    )]
+    pub model_kind: ModelKind,
+    /// Network input width; the photo is resized to fit, keeping its aspect ratio.
+    #[arg(long, env = "ARIADNE_MODEL_INPUT_WIDTH", default_value_t = 320)]
+    pub model_input_width: usize,
+    /// Network input height.
+    #[arg(long, env = "ARIADNE_MODEL_INPUT_HEIGHT", default_value_t = 240)]
+    pub model_input_height: usize,
+    /// Lowest detection confidence kept as an end.
+    #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = 0.3)]
+    pub detect_threshold: f32,
+    /// Ends closer than this many photo pixels are merged (the more confident is kept).
+    #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = 12.0)]
+    pub detect_nms_px: f64,
+    /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
+    #[arg(long, env = "ARIADNE_ORT_THREADS", default_value_t = 1)]
+    pub ort_threads: usize,
+    /// ONNX Runtime shared library (libonnxruntime.so 1.31) [default: .ort/, next to
+    /// the executable, /usr/local/lib; `make setup` fetches it].
+    #[arg(long, env = "ORT_DYLIB_PATH")]
+    pub ort_library: Option<PathBuf>,
+}
+
+impl DetectorArgs {
+    /// Checks values a model cannot be run with.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.model_input_width < 8 || self.model_input_height < 8 {
+            return Err("model input must be at least 8x8 pixels".into());
+        }
+        if !(0.0..=1.0).contains(&self.detect_threshold) {
+            return Err("detect threshold must lie in 0..=1".into());
+        }
+        if !(self.detect_nms_px >= 0.0) {
+            return Err("detect NMS radius must be a non-negative number of pixels".into());
+        }
+        if self.ort_threads == 0 {
+            return Err("ONNX Runtime threads must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// The ends a segmentation starts from, with their confidences.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Ends {
+    /// Positions `[x, y]`, pixels.
+    pub points: Vec<[f64; 2]>,
+    /// Confidence of each (1 for ends given by the caller).
+    pub confidences: Vec<f32>,
+    /// Milliseconds spent detecting them (0 when given).
+    pub detect_ms: f64,
+}
+
+impl Ends {
+    /// Ends given by the caller.
+    pub fn given(points: Vec<[f64; 2]>) -> Self {
+        Self {
+            confidences: vec![1.0; points.len()],
+            points,
+            detect_ms: 0.0,
+        }
+    }
+
+    /// Ends found in `image` by `detector`, timed.
+    pub fn detected(
+        detector: &dyn EndpointDetector,
+        image: &RgbImage,
+    ) -> Result<Self, DetectError> {
+        let t = std::time::Instant::now();
+        let found = detector.detect(image)?;
+        Ok(Self {
+            points: found.iter().map(|d| d.point).collect(),
+            confidences: found.iter().map(|d| d.confidence).collect(),
+            detect_ms: t.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+}

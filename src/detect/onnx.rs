@@ -1,0 +1,217 @@
+//! ONNX Runtime back end: the shared library is loaded at run time (`load-dynamic`),
+//! and each worker gets a session of its own, since `Session::run` needs `&mut`.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+use image::RgbImage;
+use image::imageops::{self, FilterType};
+use ort::session::Session;
+use ort::session::builder::GraphOptimizationLevel;
+use ort::value::TensorRef;
+
+use super::output::{self, Decoding, Letterbox};
+use super::{DetectError, Detection, DetectorArgs, EndpointDetector, ModelKind};
+
+/// File name of the ONNX Runtime library this build is made for.
+const RUNTIME_FILE: &str = "libonnxruntime.so.1.31.1";
+/// Grey the padding of a letterboxed input is filled with.
+const PAD: f32 = 0.5;
+
+/// Where the runtime library is looked for when no path is configured, in order:
+/// `.ort/` under the working directory (`make setup`), next to the executable,
+/// `/usr/local/lib` (the container image).
+pub fn default_runtime_candidates() -> Vec<PathBuf> {
+    let mut paths = vec![Path::new(".ort").join(RUNTIME_FILE)];
+    if let Some(dir) = std::env::current_exe()
+        .ok()
+        .and_then(|e| e.parent().map(Path::to_owned))
+    {
+        paths.push(dir.join(RUNTIME_FILE));
+    }
+    paths.push(Path::new("/usr/local/lib").join(RUNTIME_FILE));
+    paths
+}
+
+/// A model run by ONNX Runtime on the CPU.
+pub struct OnnxDetector {
+    sessions: Vec<Mutex<Session>>,
+    next: AtomicUsize,
+    kind: ModelKind,
+    input: [usize; 2],
+    decoding: Decoding,
+}
+
+impl std::fmt::Debug for OnnxDetector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OnnxDetector")
+            .field("sessions", &self.sessions.len())
+            .field("kind", &self.kind)
+            .field("input", &self.input)
+            .finish()
+    }
+}
+
+impl OnnxDetector {
+    /// Loads ONNX Runtime (once per process) and `sessions` copies of the model, each
+    /// using `args.ort_threads` threads, then runs one warm-up inference so that a bad
+    /// model fails here rather than on the first request.
+    pub fn load(args: &DetectorArgs, sessions: usize) -> Result<Self, DetectError> {
+        args.validate().map_err(DetectError::Runtime)?;
+        let environment = runtime(args.ort_library.as_deref())?;
+        if !args.model.is_file() {
+            return Err(DetectError::Model {
+                path: args.model.clone(),
+                message: "no such file (set --model / ARIADNE_MODEL)".into(),
+            });
+        }
+        let model_error = |e: ort::Error| DetectError::Model {
+            path: args.model.clone(),
+            message: e.to_string(),
+        };
+        let sessions = (0..sessions.max(1))
+            .map(|_| {
+                Session::builder(environment)
+                    .map_err(model_error)?
+                    .with_optimization_level(GraphOptimizationLevel::Level3)
+                    .and_then(|b| b.with_intra_threads(args.ort_threads))
+                    .and_then(|b| b.with_inter_threads(1))
+                    .and_then(|b| b.with_intra_op_spinning(false))
+                    .map_err(|e| model_error(e.into()))?
+                    .commit_from_file(&args.model)
+                    .map(Mutex::new)
+                    .map_err(model_error)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let detector = Self {
+            sessions,
+            next: AtomicUsize::new(0),
+            kind: args.model_kind,
+            input: [args.model_input_width, args.model_input_height],
+            decoding: Decoding {
+                threshold: args.detect_threshold,
+                nms_radius_px: args.detect_nms_px,
+            },
+        };
+        detector
+            .detect(&RgbImage::from_pixel(
+                args.model_input_width as u32,
+                args.model_input_height as u32,
+                image::Rgb([128, 128, 128]),
+            ))
+            .map_err(|e| DetectError::Model {
+                path: args.model.clone(),
+                message: format!("warm-up inference: {e}"),
+            })?;
+        Ok(detector)
+    }
+
+    /// A free session if there is one, else a wait for the next in turn.
+    fn session(&self) -> MutexGuard<'_, Session> {
+        for s in &self.sessions {
+            if let Ok(guard) = s.try_lock() {
+                return guard;
+            }
+        }
+        let i = self.next.fetch_add(1, Ordering::Relaxed) % self.sessions.len();
+        // A panic during a run leaves the session itself usable.
+        self.sessions[i]
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+impl EndpointDetector for OnnxDetector {
+    fn detect(&self, image: &RgbImage) -> Result<Vec<Detection>, DetectError> {
+        let fit = Letterbox::fit(image.width(), image.height(), self.input);
+        let tensor = input_tensor(image, fit);
+        let [w, h] = self.input;
+        let mut session = self.session();
+        let input = TensorRef::from_array_view(([1usize, 3, h, w], tensor.as_slice()))
+            .map_err(|e| DetectError::Inference(e.to_string()))?;
+        let outputs = session
+            .run(ort::inputs![input])
+            .map_err(|e| DetectError::Inference(e.to_string()))?;
+        let (shape, data) = outputs[0]
+            .try_extract_tensor::<f32>()
+            .map_err(|e| DetectError::Output(e.to_string()))?;
+        match self.kind {
+            ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding),
+            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding),
+        }
+    }
+}
+
+/// The photo resized into the network input as planar RGB in [0, 1], padding grey.
+fn input_tensor(image: &RgbImage, fit: Letterbox) -> Vec<f32> {
+    let [w, h] = fit.input;
+    let [rw, rh] = fit.resized();
+    let resized = if [rw, rh] == [image.width(), image.height()] {
+        image.clone()
+    } else {
+        imageops::resize(image, rw, rh, FilterType::Triangle)
+    };
+    let mut tensor = vec![PAD; 3 * w * h];
+    let (rw, rh) = (rw as usize, rh as usize);
+    for (y, row) in resized.as_raw().chunks_exact(rw * 3).take(rh).enumerate() {
+        for (x, px) in row.chunks_exact(3).enumerate() {
+            for (c, &v) in px.iter().enumerate() {
+                tensor[c * w * h + y * w + x] = v as f32 / 255.0;
+            }
+        }
+    }
+    tensor
+}
+
+/// Loads the ONNX Runtime library once per process and builds its environment.
+fn runtime(
+    configured: Option<&Path>,
+) -> Result<&'static ort::environment::Environment, DetectError> {
+    static ENVIRONMENT: std::sync::OnceLock<ort::environment::Environment> =
+        std::sync::OnceLock::new();
+    if let Some(env) = ENVIRONMENT.get() {
+        return Ok(env);
+    }
+    let candidates = match configured {
+        Some(path) => vec![path.to_owned()],
+        None => default_runtime_candidates(),
+    };
+    let Some(library) = candidates.iter().find(|p| p.is_file()) else {
+        let looked: Vec<_> = candidates.iter().map(|p| p.display().to_string()).collect();
+        return Err(DetectError::Runtime(format!(
+            "{RUNTIME_FILE} not found (looked at {}): run `make setup`, or point ORT_DYLIB_PATH / --ort-library at it",
+            looked.join(", ")
+        )));
+    };
+    let environment = ort::init_from(library)
+        .map_err(|e| DetectError::Runtime(e.to_string()))?
+        .with_name("ariadne")
+        .build()
+        .map_err(|e| DetectError::Runtime(e.to_string()))?;
+    Ok(ENVIRONMENT.get_or_init(|| environment))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn input_tensor_is_planar_and_padded() {
+        let mut image = RgbImage::from_pixel(4, 2, image::Rgb([255, 0, 51]));
+        image.put_pixel(3, 1, image::Rgb([0, 255, 0]));
+        let fit = Letterbox::fit(4, 2, [4, 4]);
+        let t = input_tensor(&image, fit);
+        assert_eq!(t.len(), 3 * 16);
+        assert_eq!([t[0], t[16], t[32]], [1.0, 0.0, 0.2]);
+        assert_eq!(
+            [t[7], t[16 + 7], t[32 + 7]],
+            [0.0, 1.0, 0.0],
+            "pixel (3, 1)"
+        );
+        assert!(
+            t[8..16].iter().all(|&v| v == PAD),
+            "rows 2 and 3 are padding"
+        );
+    }
+}

@@ -1,0 +1,87 @@
+//! The bundled endpoint model through ONNX Runtime on dataset images, and the start-up
+//! errors a bad model or runtime gives.
+
+#![allow(clippy::unwrap_used)] // test code: a failure should panic
+
+use std::process::Command;
+
+use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, OnnxDetector};
+use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
+use clap::Parser;
+
+#[derive(Parser)]
+struct Wrapper {
+    #[command(flatten)]
+    args: DetectorArgs,
+}
+
+fn default_args() -> DetectorArgs {
+    Wrapper::parse_from(["test"]).args
+}
+
+/// Terminal recall and precision at 15 px over a whole set. The floors sit below the
+/// measured figures (README) so that they guard against regressions, not noise.
+#[test]
+fn bundled_model_finds_the_terminals() {
+    let detector =
+        OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
+    let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
+    for (set, min_recall, min_precision) in [("simple", 0.85, 0.80), ("hard", 0.70, 0.60)] {
+        let (mut hits, mut truth, mut found) = (0, 0, 0);
+        for s in samples.iter().filter(|s| s.set == set) {
+            let bytes = std::fs::read(&s.image).unwrap();
+            let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
+            let terminals = eval::terminal_ends(&s.cables, image.width(), image.height());
+            let ends: Vec<[f64; 2]> = detector
+                .detect(&image)
+                .unwrap()
+                .iter()
+                .map(|d| d.point)
+                .collect();
+            hits += eval::match_points(&ends, &terminals, TERMINAL_MATCH_PX);
+            truth += terminals.len();
+            found += ends.len();
+        }
+        let recall = hits as f64 / truth.max(1) as f64;
+        let precision = hits as f64 / found.max(1) as f64;
+        eprintln!("{set}: recall {recall:.3} precision {precision:.3}");
+        assert!(recall >= min_recall, "{set}: recall {recall:.3}");
+        assert!(
+            precision >= min_precision,
+            "{set}: precision {precision:.3}"
+        );
+    }
+}
+
+/// `ariadne serve` with a bad model or runtime stops at once with a message saying what
+/// is wrong, before it listens.
+#[test]
+fn bad_model_or_runtime_stops_the_service_at_start_up() {
+    let dir = std::env::temp_dir().join(format!("ariadne-detector-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let corrupt = dir.join("corrupt.onnx");
+    std::fs::write(&corrupt, b"this is not a protobuf").unwrap();
+    let missing = dir.join("missing.onnx");
+    let cases: [(&[&str], &str); 3] = [
+        (&["--model", missing.to_str().unwrap()], "no such file"),
+        (&["--model", corrupt.to_str().unwrap()], "corrupt.onnx"),
+        (
+            &["--ort-library", "/nonexistent/libonnxruntime.so.1.31.1"],
+            "make setup",
+        ),
+    ];
+    for (flags, expected) in cases {
+        let out = Command::new(env!("CARGO_BIN_EXE_ariadne"))
+            .args(["serve", "--bind", "127.0.0.1:0"])
+            .args(flags)
+            .env_remove("ORT_DYLIB_PATH")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flags:?} started");
+        assert!(
+            stderr.contains("endpoint detector") && stderr.contains(expected),
+            "{flags:?}: {stderr}"
+        );
+    }
+}
