@@ -1,11 +1,12 @@
-//! Benchmarks on real dataset images (640x480): each stage alone and the whole
-//! `segment` path from JPEG bytes to the mask PNG, single-threaded.
+//! Benchmarks on real dataset images (640x480): each stage alone, endpoint detection,
+//! and the whole `segment` path from JPEG bytes to the mask PNG, single-threaded.
 //!
 //! Run: `cargo bench --bench pipeline` (reads the dataset from `$ARIADNE_DATASET`,
 //! default `../shared/datasets/cables`).
 
 #![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
 
+use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
@@ -36,6 +37,53 @@ fn fixtures() -> Vec<Fixture> {
             Fixture { jpeg, image, ends }
         })
         .collect()
+}
+
+#[derive(clap::Parser)]
+struct DetectorFlags {
+    #[command(flatten)]
+    args: DetectorArgs,
+}
+
+/// Endpoint detection with the bundled model, ONNX Runtime on one thread: resize,
+/// inference, decoding. Needs `make setup`.
+#[divan::bench(sample_count = 50)]
+fn detect_endpoints_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
+    let detector = OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)");
+    let mut i = 0;
+    bencher.bench_local(|| {
+        i += 1;
+        detector.detect(&fx[i % fx.len()].image).unwrap()
+    });
+}
+
+/// The service's path for a photo alone: decode → detect ends → engine → mask PNG.
+#[divan::bench(sample_count = 30)]
+fn segment_with_detection_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
+    let detector = OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)");
+    let p = Params::default();
+    let mut i = 0;
+    bencher.bench_local(|| {
+        let f = &fx[i % fx.len()];
+        i += 1;
+        let image = decode::decode_rgb(&f.jpeg, u64::MAX).unwrap();
+        let ends: Vec<[f64; 2]> = detector
+            .detect(&image)
+            .unwrap()
+            .iter()
+            .map(|d| d.point)
+            .collect();
+        let seg = engine::segment(&image, &ends, &p).unwrap();
+        report::mask_png(&render::render_mask(
+            &seg,
+            engine::MaskKind::Binary,
+            p.mask_width_px,
+        ))
+    });
 }
 
 fn settings(p: &Params) -> SlicSettings {

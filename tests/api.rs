@@ -247,6 +247,21 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
     assert!(cables.len() >= 4, "{} cables", cables.len());
     assert!(ends.iter().filter(|e| e["cable"].is_u64()).count() >= 4);
     assert!(body["timings_ms"]["endpoints"].as_f64().unwrap() > 0.0);
+    let metrics = app
+        .client
+        .get(app.url("/metrics"))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    let inferences = metric_value(
+        &metrics,
+        "ariadne_stage_duration_seconds_count",
+        &["stage=\"endpoints\""],
+    );
+    assert!(inferences >= 1.0, "endpoint inference time is recorded");
 }
 
 #[tokio::test(flavor = "multi_thread")]

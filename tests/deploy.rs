@@ -112,16 +112,14 @@ fn manifests_match_the_code() {
 
     // The settings parse as the service would parse them.
     let mut argv = vec!["test".to_string()];
-    for (k, v) in &env {
-        if let Some(arg) = Wrapper::command()
+    let command = Wrapper::command();
+    for (k, v) in env.iter().filter(|(_, v)| !v.is_empty()) {
+        let arg = command
             .get_arguments()
             .find(|a| a.get_env().is_some_and(|e| e == k.as_str()))
-        {
-            if !v.is_empty() {
-                argv.push(format!("--{}", arg.get_long().unwrap()));
-                argv.push(v.clone());
-            }
-        }
+            .unwrap();
+        argv.push(format!("--{}", arg.get_long().unwrap()));
+        argv.push(v.clone());
     }
     let parsed = Wrapper::try_parse_from(&argv)
         .unwrap_or_else(|e| panic!("{argv:?}: {e}"))

@@ -9,7 +9,7 @@ photometric augmentation and synthetic cable scenes.
 
 Run from the repository root (see models/README.md):
 
-    python training/train_endpoints.py --epochs 150 --out models/endpoints.onnx
+    python training/train_endpoints.py --out models/endpoints.onnx
 
 The validation images are fixed (VALIDATION below) and never used for training.
 """
@@ -314,11 +314,12 @@ def batch(samples, rng, size, synthetic_fraction):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--epochs", type=int, default=150)
+    ap.add_argument("--epochs", type=int, default=250)
     ap.add_argument("--steps-per-epoch", type=int, default=12)
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--lr", type=float, default=3e-3)
-    ap.add_argument("--synthetic", type=float, default=0.3)
+    ap.add_argument("--synthetic", type=float, default=0.2)
+    ap.add_argument("--width", type=int, default=32, help="channels of the body")
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--out", default="models/endpoints.onnx")
     args = ap.parse_args()
@@ -328,7 +329,7 @@ def main():
     train, val = load_split(dataset_dir())
     print(f"train {len(train)} images, validation {len(val)}: "
           f"{sorted(f'{s}/{n}' for s, n, _, _ in val)}")
-    model = EndNet()
+    model = EndNet(args.width)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
     total = args.epochs * args.steps_per_epoch
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=total)
@@ -371,6 +372,7 @@ def main():
               "train": {"recall": train_r, "precision": train_p},
               "validation": {"recall": val_r, "precision": val_p},
               "validation_images": sorted(f"{s}/{n}" for s, n in VALIDATION)}
+    torch.save(model.state_dict(), out.with_suffix(".pt"))
     out.with_suffix(".train.json").write_text(json.dumps(report, indent=2) + "\n")
     print(f"wrote {out}")
 

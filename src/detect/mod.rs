@@ -82,10 +82,10 @@ pub struct DetectorArgs {
     #[arg(long, env = "ARIADNE_MODEL_INPUT_HEIGHT", default_value_t = 240)]
     pub model_input_height: usize,
     /// Lowest detection confidence kept as an end.
-    #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = 0.3)]
+    #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = 0.35)]
     pub detect_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
-    #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = 12.0)]
+    #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = 20.0)]
     pub detect_nms_px: f64,
     /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
     #[arg(long, env = "ARIADNE_ORT_THREADS", default_value_t = 1)]
@@ -105,7 +105,7 @@ impl DetectorArgs {
         if !(0.0..=1.0).contains(&self.detect_threshold) {
             return Err("detect threshold must lie in 0..=1".into());
         }
-        if !(self.detect_nms_px >= 0.0) {
+        if self.detect_nms_px.is_nan() || self.detect_nms_px < 0.0 {
             return Err("detect NMS radius must be a non-negative number of pixels".into());
         }
         if self.ort_threads == 0 {

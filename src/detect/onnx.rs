@@ -66,23 +66,8 @@ impl OnnxDetector {
                 message: "no such file (set --model / ARIADNE_MODEL)".into(),
             });
         }
-        let model_error = |e: ort::Error| DetectError::Model {
-            path: args.model.clone(),
-            message: e.to_string(),
-        };
         let sessions = (0..sessions.max(1))
-            .map(|_| {
-                Session::builder(environment)
-                    .map_err(model_error)?
-                    .with_optimization_level(GraphOptimizationLevel::Level3)
-                    .and_then(|b| b.with_intra_threads(args.ort_threads))
-                    .and_then(|b| b.with_inter_threads(1))
-                    .and_then(|b| b.with_intra_op_spinning(false))
-                    .map_err(|e| model_error(e.into()))?
-                    .commit_from_file(&args.model)
-                    .map(Mutex::new)
-                    .map_err(model_error)
-            })
+            .map(|_| build_session(environment, args).map(Mutex::new))
             .collect::<Result<Vec<_>, _>>()?;
         let detector = Self {
             sessions,
@@ -141,6 +126,34 @@ impl EndpointDetector for OnnxDetector {
             ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding),
         }
     }
+}
+
+/// One session of the model with the configured threads (no spinning: the workers
+/// share the CPUs with the rest of the pipeline).
+fn build_session(
+    environment: &ort::environment::Environment,
+    args: &DetectorArgs,
+) -> Result<Session, DetectError> {
+    let model_error = |message: String| DetectError::Model {
+        path: args.model.clone(),
+        message,
+    };
+    let mut builder = Session::builder(environment).map_err(|e| model_error(e.to_string()))?;
+    builder = builder
+        .with_optimization_level(GraphOptimizationLevel::Level3)
+        .map_err(|e| model_error(e.to_string()))?;
+    builder = builder
+        .with_intra_threads(args.ort_threads)
+        .map_err(|e| model_error(e.to_string()))?;
+    builder = builder
+        .with_inter_threads(1)
+        .map_err(|e| model_error(e.to_string()))?;
+    builder = builder
+        .with_intra_op_spinning(false)
+        .map_err(|e| model_error(e.to_string()))?;
+    builder
+        .commit_from_file(&args.model)
+        .map_err(|e| model_error(e.to_string()))
 }
 
 /// The photo resized into the network input as planar RGB in [0, 1], padding grey.

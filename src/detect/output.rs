@@ -138,10 +138,14 @@ pub fn yolo(
         )));
     }
     // Ultralytics exports attributes first; a transposed export has more rows than columns.
-    let (attributes, boxes, at): (usize, usize, Box<dyn Fn(usize, usize) -> f32>) = if a <= b {
-        (a, b, Box::new(|attr, i| data[attr * b + i]))
-    } else {
-        (b, a, Box::new(|attr, i| data[i * b + attr]))
+    let transposed = a > b;
+    let (attributes, boxes) = if transposed { (b, a) } else { (a, b) };
+    let at = |attr: usize, i: usize| {
+        if transposed {
+            data[i * b + attr]
+        } else {
+            data[attr * b + i]
+        }
     };
     let mut found = Vec::new();
     for i in 0..boxes {

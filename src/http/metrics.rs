@@ -22,9 +22,9 @@ pub const REJECTIONS: &str = "ariadne_rejections_total";
 /// Cables found per image.
 pub const CABLES: &str = "ariadne_cables_per_image";
 
-/// Latency buckets, seconds: 5 ms to 30 s.
-const SECONDS_BUCKETS: [f64; 14] = [
-    0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0,
+/// Latency buckets, seconds: 1 ms (endpoint inference) to 30 s.
+const SECONDS_BUCKETS: [f64; 16] = [
+    0.001, 0.0025, 0.005, 0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0,
 ];
 /// Cable-count buckets.
 const CABLE_BUCKETS: [f64; 9] = [0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 20.0];

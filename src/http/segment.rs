@@ -361,7 +361,11 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
     let decode_ms = ms(t);
     let ends = match job.ends {
         Some(points) => Ends::given(points),
-        None => Ends::detected(job.detector.as_ref(), &image)?,
+        None => {
+            let found = Ends::detected(job.detector.as_ref(), &image)?;
+            metrics::stage("endpoints", found.detect_ms);
+            found
+        }
     };
     let seg = engine::segment(&image, &ends.points, &job.params)?;
     let t = Instant::now();
@@ -405,7 +409,6 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
     };
     for (name, value) in [
         ("decode", decode_ms),
-        ("endpoints", ends.detect_ms),
         ("superpixels", seg.timings.superpixels),
         ("graph", seg.timings.graph),
         ("walks", seg.timings.walks),
