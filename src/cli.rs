@@ -202,7 +202,7 @@ fn segment(args: &SegmentArgs) -> Result<(), CliError> {
         Some(points) => Ends::given(points),
         None => Ends::detected(&OnnxDetector::load(&args.detector, 1)?, &image)?,
     };
-    let seg = engine::segment(&image, &ends.points, &params)?;
+    let seg = engine::segment_with_confidence(&image, &ends.points, &ends.confidences, &params)?;
     let t = std::time::Instant::now();
     let mask = render::render_mask(&seg, args.mask_kind.into(), params.mask_width_px);
     let overlay = args.overlay.as_ref().map(|_| render::overlay(&image, &seg));

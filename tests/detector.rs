@@ -26,7 +26,7 @@ fn bundled_model_finds_the_terminals() {
     let detector =
         OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
     let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
-    for (set, min_recall, min_precision) in [("simple", 0.85, 0.80), ("hard", 0.70, 0.60)] {
+    for (set, min_recall, min_precision) in [("simple", 0.85, 0.80), ("hard", 0.65, 0.65)] {
         let (mut hits, mut truth, mut found) = (0, 0, 0);
         for s in samples.iter().filter(|s| s.set == set) {
             let bytes = std::fs::read(&s.image).unwrap();

@@ -42,6 +42,14 @@ pub enum EngineError {
         /// Position of the end in the given list.
         index: usize,
     },
+    /// Not one confidence per end.
+    #[error("{confidences} confidences for {ends} ends")]
+    BadConfidences {
+        /// Number of ends.
+        ends: usize,
+        /// Number of confidences.
+        confidences: usize,
+    },
     /// The image is too small to segment with the given parameters.
     #[error("image {width}x{height} is too small: at least {min}x{min} pixels are needed")]
     ImageTooSmall {

@@ -113,7 +113,7 @@ pub fn validate_ends(ends: &[[f64; 2]], width: u32, height: u32) -> Result<(), E
 }
 
 /// Finds the cables of `image` that start or end at the given `ends` (pixel
-/// coordinates, unpaired; the engine pairs them).
+/// coordinates, unpaired; the engine pairs them), all trusted fully.
 ///
 /// Errors: invalid parameters, an image smaller than [`MIN_SIDE`], an end outside the
 /// image or not finite.
@@ -122,7 +122,24 @@ pub fn segment(
     ends: &[[f64; 2]],
     params: &Params,
 ) -> Result<Segmentation, EngineError> {
+    segment_with_confidence(image, ends, &vec![1.0; ends.len()], params)
+}
+
+/// [`segment`] with a confidence in 0..=1 per end (a detector's scores): a cable that
+/// reaches no second end is only as credible as the end it starts from.
+pub fn segment_with_confidence(
+    image: &RgbImage,
+    ends: &[[f64; 2]],
+    confidence: &[f32],
+    params: &Params,
+) -> Result<Segmentation, EngineError> {
     params.validate()?;
+    if confidence.len() != ends.len() {
+        return Err(EngineError::BadConfidences {
+            ends: ends.len(),
+            confidences: confidence.len(),
+        });
+    }
     let (width, height) = image.dimensions();
     if width < MIN_SIDE || height < MIN_SIDE {
         return Err(EngineError::ImageTooSmall {
@@ -163,7 +180,7 @@ pub fn segment(
         })
         .collect();
     let walks = walk::walk_all(&graph, &lab, &seeds, sp.step, params);
-    let chosen = pairing::pair(&walks, seeds.len(), params);
+    let chosen = pairing::pair(&walks, confidence, params);
     timings.walks = ms(t);
 
     let t = Instant::now();

@@ -40,9 +40,12 @@ pub struct Pairing {
     pub score: f32,
 }
 
-/// Pairs `n_seeds` ends using `walks` (see module docs). The result is ordered by
-/// decreasing score.
-pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
+/// Pairs the ends using `walks` (see module docs); `confidence` holds one value in
+/// 0..=1 per end (1 for ends given by a caller, the detector's score otherwise). A cable
+/// that no second end confirms rests on its start end alone, so its score is scaled by
+/// that end's confidence. The result is ordered by decreasing score.
+pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
+    let n_seeds = confidence.len();
     // Which ordered (from, to) closures exist, to find confirmed pairs.
     let closes = |from: usize, to: usize| {
         walks
@@ -54,11 +57,12 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
         .enumerate()
         .filter(|(_, w)| w.length_px >= params.min_cable_length_px)
         .map(|(i, w)| {
+            let alone = confidence[w.seed];
             let (far, factor) = match w.end {
                 WalkEnd::Seed(t) if closes(t, w.seed) => (FarEnd::Seed(t), 1.0),
-                WalkEnd::Seed(t) => (FarEnd::Seed(t), params.unconfirmed_factor),
-                WalkEnd::Border => (FarEnd::Border, params.border_factor),
-                WalkEnd::Lost => (FarEnd::Open, params.lost_factor),
+                WalkEnd::Seed(t) => (FarEnd::Seed(t), params.unconfirmed_factor * alone),
+                WalkEnd::Border => (FarEnd::Border, params.border_factor * alone),
+                WalkEnd::Lost => (FarEnd::Open, params.lost_factor * alone),
             };
             Pairing {
                 start: w.seed,
@@ -69,7 +73,7 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
             }
         })
         .collect();
-    hypotheses.extend(joins(walks, params));
+    hypotheses.extend(joins(walks, confidence, params));
     hypotheses.retain(|h| h.score >= params.min_cable_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
@@ -91,8 +95,9 @@ pub fn pair(walks: &[Walk], n_seeds: usize, params: &Params) -> Vec<Pairing> {
 }
 
 /// Hypotheses joining two lost walks whose heads face each other within
-/// `join_radius_px`, each turning at most `max_turn_deg` to meet the other.
-fn joins(walks: &[Walk], params: &Params) -> Vec<Pairing> {
+/// `join_radius_px`, each turning at most `max_turn_deg` to meet the other; scored by
+/// the geometric means of the two walks' qualities and of their ends' confidences.
+fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
     let cos_max = params.max_turn_deg.to_radians().cos();
     let lost: Vec<(usize, &Walk)> = walks
         .iter()
@@ -127,7 +132,9 @@ fn joins(walks: &[Walk], params: &Params) -> Vec<Pairing> {
                     far: FarEnd::Seed(b.seed),
                     walk: i,
                     joined: Some(j),
-                    score: (a.quality() * b.quality()).sqrt() * params.unconfirmed_factor,
+                    score: (a.quality() * b.quality() * confidence[a.seed] * confidence[b.seed])
+                        .sqrt()
+                        * params.unconfirmed_factor,
                 });
             }
         }
@@ -163,7 +170,7 @@ mod tests {
             walk(2, WalkEnd::Border, 0.7),
             walk(3, WalkEnd::Lost, 0.9),
         ];
-        let got = pair(&walks, 4, &p);
+        let got = pair(&walks, &[1.0; 4], &p);
         assert_eq!(got.len(), 3);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
         assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
@@ -185,12 +192,16 @@ mod tests {
         let mut b = walk(1, WalkEnd::Lost, 0.8);
         b.end_point = [140.0, 100.0];
         b.end_heading = [-1.0, 0.0];
-        let got = pair(&[a.clone(), b.clone()], 2, &p);
+        let got = pair(&[a.clone(), b.clone()], &[1.0; 2], &p);
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         // Heads pointing the same way do not meet.
         b.end_heading = [1.0, 0.0];
-        assert!(pair(&[a, b], 2, &p).iter().all(|h| h.joined.is_none()));
+        assert!(
+            pair(&[a, b], &[1.0; 2], &p)
+                .iter()
+                .all(|h| h.joined.is_none())
+        );
     }
 
     #[test]
@@ -199,6 +210,23 @@ mod tests {
         let mut short = walk(0, WalkEnd::Border, 1.0);
         short.length_px = 5.0;
         let weak = walk(1, WalkEnd::Lost, 0.01);
-        assert!(pair(&[short, weak], 2, &p).is_empty());
+        assert!(pair(&[short, weak], &[1.0; 2], &p).is_empty());
+    }
+
+    #[test]
+    fn unconfirmed_cables_rest_on_their_end_confidence() {
+        let p = Params::default();
+        let walks = vec![
+            walk(0, WalkEnd::Border, 0.8),
+            walk(1, WalkEnd::Border, 0.8),
+            walk(2, WalkEnd::Seed(3), 0.8),
+            walk(3, WalkEnd::Seed(2), 0.8),
+        ];
+        // A weak detection leaving through the frame is dropped; a confirmed pair of
+        // weak detections is kept at full score.
+        let got = pair(&walks, &[1.0, 0.05, 0.4, 0.4], &p);
+        assert_eq!(got.len(), 2);
+        assert_eq!((got[0].start, got[0].score), (2, walks[2].quality()));
+        assert_eq!(got[1].start, 0);
     }
 }

@@ -88,8 +88,8 @@ pub fn evaluate_sample(
             .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?,
         None => Ends::given(terminals.clone()),
     };
-    let (endpoints, ends) = (ends.detect_ms, ends.points);
-    let seg = engine::segment(&image, &ends, params)
+    let endpoints = ends.detect_ms;
+    let seg = engine::segment_with_confidence(&image, &ends.points, &ends.confidences, params)
         .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
     let t = Instant::now();
     let pred = match render::render_mask(&seg, engine::MaskKind::Binary, params.mask_width_px) {
@@ -114,9 +114,9 @@ pub fn evaluate_sample(
         matched_cables,
         matched_iou_sum,
         iou: iou(&pred, &gt_all),
-        ends: ends.len(),
+        ends: ends.points.len(),
         terminals: terminals.len(),
-        terminals_matched: match_points(&ends, &terminals, TERMINAL_MATCH_PX),
+        terminals_matched: match_points(&ends.points, &terminals, TERMINAL_MATCH_PX),
         timings_ms: StageMs {
             decode,
             endpoints,

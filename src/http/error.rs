@@ -153,6 +153,7 @@ impl From<EngineError> for ApiError {
                 "endpoint_outside_image"
             }
             EngineError::ImageTooSmall { .. } => "image_too_small",
+            EngineError::BadConfidences { .. } => return Self::Internal(e.to_string()),
         };
         Self::Unprocessable {
             code,

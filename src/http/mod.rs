@@ -110,6 +110,8 @@ pub fn openapi() -> utoipa::openapi::OpenApi {
 
 /// The application: all routes, limits and middleware over `state`.
 pub fn app(state: AppState) -> Router {
+    // Install the recorder now: what is recorded before it exists is lost.
+    metrics::handle();
     let (router, api) = routes().split_for_parts();
     let body_limit = state.config.max_body_bytes;
     router

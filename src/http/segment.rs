@@ -367,7 +367,8 @@ fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
             found
         }
     };
-    let seg = engine::segment(&image, &ends.points, &job.params)?;
+    let seg =
+        engine::segment_with_confidence(&image, &ends.points, &ends.confidences, &job.params)?;
     let t = Instant::now();
     let mask = render::render_mask(&seg, job.mask, job.params.mask_width_px);
     let overlay = job.overlay.then(|| render::overlay(&image, &seg));
