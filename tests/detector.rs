@@ -53,6 +53,31 @@ fn bundled_model_finds_the_terminals() {
     }
 }
 
+/// End to end with detected ends: weighted IoU on the development split. `simple` is
+/// held to the 0.65; `hard` (3 images) measures 0.465, under the 0.50,
+/// and is guarded at 0.40 against regressions (README, Accuracy).
+#[test]
+fn detected_ends_segment_the_development_split() {
+    let detector =
+        OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
+    let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
+    let simple = ariadne_dlo::engine::Params::preset("default").unwrap();
+    let hard = ariadne_dlo::engine::Params::preset("clutter").unwrap();
+    let results: Vec<eval::ImageResult> = samples
+        .iter()
+        .map(|s| {
+            let params = if s.set == "hard" { &hard } else { &simple };
+            eval::evaluate_sample(s, params, Some(&detector)).unwrap()
+        })
+        .collect();
+    let sets = eval::summarise(&results);
+    let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;
+    let (simple_iou, hard_iou) = (get("simple"), get("hard"));
+    eprintln!("detected ends, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
+    assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");
+    assert!(hard_iou >= 0.40, "hard {hard_iou:.3}");
+}
+
 /// `ariadne serve` with a bad model or runtime stops at once with a message saying what
 /// is wrong, before it listens.
 #[test]

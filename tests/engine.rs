@@ -88,6 +88,44 @@ fn synthetic_scenes_are_recovered() {
     );
 }
 
+/// A cable crossing the whole frame has no end in view: it is found from the border,
+/// and only when border cables are enabled.
+#[test]
+fn a_cable_crossing_the_frame_is_found_without_ends() {
+    let (w, h) = (320u32, 240u32);
+    let image = image::RgbImage::from_fn(w, h, |x, y| {
+        let centre = 120.0 + 40.0 * (x as f32 / 60.0).sin();
+        if (y as f32 - centre).abs() <= 4.0 {
+            image::Rgb([200, 30, 30])
+        } else {
+            image::Rgb([235, 235, 225])
+        }
+    });
+    let p = Params::default();
+    let seg = engine::segment(&image, &[], &p).unwrap();
+    assert_eq!(seg.cables.len(), 1, "one cable");
+    let line = &seg.cables[0].polyline;
+    let xs: Vec<f32> = line.iter().map(|q| q[0]).collect();
+    let (lo, hi) = xs
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(lo < 15.0 && hi > w as f32 - 16.0, "spans {lo}..{hi}");
+    for q in line.iter().filter(|q| q[0] > 8.0 && q[0] < w as f32 - 8.0) {
+        let centre = 120.0 + 40.0 * (q[0] / 60.0).sin();
+        assert!((q[1] - centre).abs() < 3.0, "{q:?} is off the cable");
+    }
+    let off = Params {
+        border_cables: false,
+        ..p
+    };
+    assert!(
+        engine::segment(&image, &[], &off)
+            .unwrap()
+            .cables
+            .is_empty()
+    );
+}
+
 #[test]
 fn bad_parameters_and_ends_are_errors_not_panics() {
     let s = scene(&SceneSpec {
@@ -128,8 +166,8 @@ fn bad_parameters_and_ends_are_errors_not_panics() {
     assert!(seg.cables.is_empty());
 }
 
-/// Weighted IoU on the development split with the true ends. The floors are the
-/// measured values less a small margin (see README, Accuracy): they catch regressions.
+/// Weighted IoU on the development split with the true ends: the acceptance
+/// floors (measured values in the README, Accuracy).
 #[test]
 fn development_split_accuracy_floors() {
     let dir = eval::default_dataset_dir();
@@ -147,6 +185,6 @@ fn development_split_accuracy_floors() {
     let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;
     let (simple_iou, hard_iou) = (get("simple"), get("hard"));
     eprintln!("weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
-    assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");
+    assert!(simple_iou >= 0.70, "simple {simple_iou:.3}");
     assert!(hard_iou >= 0.60, "hard {hard_iou:.3}");
 }

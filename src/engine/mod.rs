@@ -6,6 +6,7 @@
 //! every end) → [`pairing`] (global choice of walks) → [`spline`] (B-spline fit) →
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay).
 
+mod border;
 pub mod color;
 mod error;
 pub mod graph;
@@ -30,7 +31,7 @@ use graph::Graph;
 use pairing::{FarEnd, Pairing};
 use spline::BSpline;
 use superpixels::{SlicSettings, Superpixels};
-use walk::{Seed, Walk, dist, heading};
+use walk::{Seed, Walk, WalkEnd, dist, heading};
 
 /// Smallest image side the engine accepts, pixels.
 pub const MIN_SIDE: u32 = 16;
@@ -113,7 +114,8 @@ pub fn validate_ends(ends: &[[f64; 2]], width: u32, height: u32) -> Result<(), E
 }
 
 /// Finds the cables of `image` that start or end at the given `ends` (pixel
-/// coordinates, unpaired; the engine pairs them), all trusted fully.
+/// coordinates, unpaired; the engine pairs them), all trusted fully; with
+/// `border_cables`, also those crossing the frame with no end in view.
 ///
 /// Errors: invalid parameters, an image smaller than [`MIN_SIDE`], an end outside the
 /// image or not finite.
@@ -207,6 +209,16 @@ pub fn segment_with_confidence(
     }
     timings.splines = ms(t);
 
+    if params.border_cables {
+        let t = Instant::now();
+        let found = border_crossing_cables(&scene, &chosen);
+        for mut cable in found {
+            cable.id = cables.len();
+            cables.push(cable);
+        }
+        timings.walks += ms(t);
+    }
+
     Ok(Segmentation {
         width,
         height,
@@ -219,6 +231,64 @@ pub fn segment_with_confidence(
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Seeds on the border count as this sure as a given end.
+const BORDER_SEED_CONFIDENCE: f32 = 0.5;
+/// Lowest score of a cable found from border seeds alone.
+const MIN_BORDER_CABLE_SCORE: f32 = 0.35;
+/// Shortest cable found from border seeds alone, in superpixel steps.
+const MIN_BORDER_CABLE_STEPS: f32 = 5.0;
+/// Largest fraction of a border walk's superpixels that may belong to cables already
+/// found (a walk that runs along one of them explains nothing new).
+const MAX_COVERED_FRACTION: f32 = 0.25;
+
+/// Cables crossing the whole frame, with no end in view: walks from border seeds where
+/// the border shows a colour the cables in `chosen` do not explain, kept when they reach
+/// another border point (see [`border`]). Their ends belong to no given end.
+fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> Vec<Cable> {
+    let Scene {
+        walks, graph, sp, ..
+    } = *scene;
+    let mut covered = vec![false; graph.len()];
+    for choice in chosen {
+        let joined = choice.joined.map(|j| &walks[j].vertices[..]).unwrap_or(&[]);
+        for &v in walks[choice.walk].vertices.iter().chain(joined) {
+            covered[v as usize] = true;
+            for &n in graph.neighbours(v) {
+                covered[n as usize] = true;
+            }
+        }
+    }
+    let seeds = border::border_seeds(graph, sp, &covered);
+    if seeds.is_empty() {
+        return Vec::new();
+    }
+    let min_length = MIN_BORDER_CABLE_STEPS * sp.step;
+    let crossing: Vec<Walk> = walk::walk_all(graph, scene.lab, &seeds, sp.step, scene.params)
+        .into_iter()
+        .filter(|w| {
+            let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
+            matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
+                && w.length_px >= min_length
+                && (on_found as f32) <= MAX_COVERED_FRACTION * w.vertices.len() as f32
+        })
+        .collect();
+    let confidence = vec![BORDER_SEED_CONFIDENCE; seeds.len()];
+    let border_scene = Scene {
+        walks: &crossing,
+        seeds: &seeds,
+        ..*scene
+    };
+    pairing::pair(&crossing, &confidence, scene.params)
+        .iter()
+        .filter(|c| c.score >= MIN_BORDER_CABLE_SCORE && c.far != FarEnd::Open)
+        .filter_map(|c| model_cable(&border_scene, c))
+        .map(|mut cable| {
+            cable.end_indices = [None, None];
+            cable
+        })
+        .collect()
 }
 
 /// Everything the modelling of one cable reads: the earlier stages' results.

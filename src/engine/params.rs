@@ -93,6 +93,9 @@ pub struct Params {
     pub polyline_step_px: f32,
     /// Refine the centreline on the image (sub-pixel) before the final fit.
     pub refine: bool,
+    /// Also look for cables with no end in view, crossing the frame from border to
+    /// border (seeded where the border shows an unexplained colour).
+    pub border_cables: bool,
     /// Half-length of the profiles sampled across the curve during refinement, pixels.
     pub refine_radius_px: f32,
     /// Width of the stroke drawn for each cable in the masks, pixels; 0 means the
@@ -137,6 +140,7 @@ impl Default for Params {
             knot_spacing_px: 45.0,
             polyline_step_px: 2.0,
             refine: true,
+            border_cables: true,
             refine_radius_px: 16.0,
             mask_width_px: 7.0,
         }

@@ -127,13 +127,15 @@ pub async fn segment(
 ) -> Result<Response, ApiError> {
     let started = Instant::now();
     let deadline = started + Duration::from_millis(state.config.deadline_ms);
+    // The body is read before the query is judged, so that a client still uploading
+    // gets its 400 rather than a reset connection.
+    let (image, part_ends, options) = read_body(&state, request).await?;
     let query: SegmentQuery = match query.as_deref() {
         None | Some("") => SegmentQuery::default(),
         Some(q) => serde_urlencoded::from_str(q).map_err(|e| {
             ApiError::bad_request("bad_query", format!("invalid query string: {e}"))
         })?,
     };
-    let (image, part_ends, options) = read_body(&state, request).await?;
     if part_ends.is_some() && query.endpoints.is_some() {
         return Err(ApiError::bad_request(
             "bad_endpoints",
