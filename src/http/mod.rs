@@ -311,7 +311,8 @@ pub fn run(config: ServeArgs) -> Result<(), String> {
         .enable_all()
         .build()
         .map_err(|e| format!("cannot start the async runtime: {e}"))?;
-    runtime.block_on(async move {
+    let grace = Duration::from_secs(config.shutdown_grace_s);
+    let state = runtime.block_on(async move {
         let state = AppState::new(config.clone(), presets, Arc::new(detector))
             .map_err(|e| format!("cannot start workers: {e}"))?;
         let listener = TcpListener::bind(config.bind)
@@ -330,10 +331,14 @@ pub fn run(config: ServeArgs) -> Result<(), String> {
                 Err(e) => tracing::error!(error = %e, "warm-up failed: staying not ready"),
             }
         });
-        serve(listener, state, shutdown_signal())
+        serve(listener, state.clone(), shutdown_signal())
             .await
             .map_err(|e| format!("server error: {e}"))?;
-        tracing::info!("stopped");
-        Ok(())
-    })
+        Ok::<_, String>(state)
+    })?;
+    if !state.pool.wait_idle(grace) {
+        tracing::warn!("grace period over with worker jobs still running");
+    }
+    tracing::info!("stopped");
+    Ok(())
 }

@@ -11,7 +11,7 @@ use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use tokio::sync::oneshot;
 
@@ -90,6 +90,24 @@ impl WorkerPool {
         &self.counts
     }
 
+    /// Blocks until no job is queued or running, or `timeout` has passed; true when idle.
+    /// Shutdown calls it so that work still running for clients that have gone (which
+    /// the HTTP drain does not wait for) ends before the process does.
+    pub fn wait_idle(&self, timeout: Duration) -> bool {
+        let until = Instant::now() + timeout;
+        loop {
+            let busy = self.counts.queued.load(Ordering::SeqCst)
+                + self.counts.running.load(Ordering::SeqCst);
+            if busy == 0 {
+                return true;
+            }
+            if Instant::now() >= until {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
     /// Queues `f` if there is room, else returns [`PoolFull`] at once. The receiver gets
     /// the job's value (or its panic) when it ends; dropping the receiver does not stop
     /// the job.
@@ -147,7 +165,21 @@ fn worker_loop(receiver: &Mutex<Receiver<Job>>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::time::Duration;
+
+    #[test]
+    fn waits_for_jobs_whose_requester_has_gone() {
+        let pool = WorkerPool::new(1, 2).unwrap();
+        assert!(pool.wait_idle(Duration::ZERO));
+        let (done_tx, done_rx) = std::sync::mpsc::channel();
+        // Submitted, then forgotten: the receiver is dropped at once.
+        drop(pool.try_submit(move || {
+            std::thread::sleep(Duration::from_millis(50));
+            done_tx.send(()).unwrap();
+        }));
+        assert!(!pool.wait_idle(Duration::from_millis(1)));
+        assert!(pool.wait_idle(Duration::from_secs(5)));
+        assert!(done_rx.try_recv().is_ok(), "the job ran to its end");
+    }
 
     #[tokio::test]
     async fn runs_jobs_rejects_overflow_and_survives_panics() {
