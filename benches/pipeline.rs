@@ -6,7 +6,7 @@
 
 #![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
 
-use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, OnnxDetector};
+use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, Ends, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
@@ -50,8 +50,7 @@ struct DetectorFlags {
 #[divan::bench(sample_count = 50)]
 fn detect_endpoints_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
-    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
-    let detector = OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)");
+    let detector = single_thread_detector();
     let mut i = 0;
     bencher.bench_local(|| {
         i += 1;
@@ -62,28 +61,54 @@ fn detect_endpoints_640x480(bencher: divan::Bencher) {
 /// The service's path for a photo alone: decode → detect ends → engine → mask PNG.
 #[divan::bench(sample_count = 30)]
 fn segment_with_detection_640x480(bencher: divan::Bencher) {
+    let detector = single_thread_detector();
+    bench_segment(bencher, |_, image| {
+        Ends::detected(&detector, image).unwrap()
+    });
+}
+
+/// Decode → engine → binary mask → PNG, as `ariadne segment` and the service do.
+#[divan::bench(sample_count = 30)]
+fn segment_640x480(bencher: divan::Bencher) {
+    bench_segment(bencher, |f, _| Ends::given(f.ends.clone()));
+}
+
+/// Decode → ends → engine → binary mask PNG over the fixtures in turn.
+fn bench_segment(bencher: divan::Bencher, ends: impl Fn(&Fixture, &image::RgbImage) -> Ends) {
     let fx = fixtures();
-    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
-    let detector = OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)");
     let p = Params::default();
     let mut i = 0;
     bencher.bench_local(|| {
         let f = &fx[i % fx.len()];
         i += 1;
         let image = decode::decode_rgb(&f.jpeg, u64::MAX).unwrap();
-        let ends: Vec<[f64; 2]> = detector
-            .detect(&image)
-            .unwrap()
-            .iter()
-            .map(|d| d.point)
-            .collect();
-        let seg = engine::segment(&image, &ends, &p).unwrap();
-        report::mask_png(&render::render_mask(
-            &seg,
-            engine::MaskKind::Binary,
-            p.mask_width_px,
-        ))
+        let ends = ends(f, &image);
+        let seg =
+            engine::segment_with_confidence(&image, &ends.points, &ends.confidences, &p).unwrap();
+        binary_mask_png(&seg, &p)
     });
+}
+
+/// The engine's first step: Lab planes, blurred.
+fn blurred_lab(img: &image::RgbImage, p: &Params) -> LabImage {
+    let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
+    lab.gaussian_blur(p.sigma);
+    lab
+}
+
+/// The binary mask of `seg` as PNG bytes, as the service sends it.
+fn binary_mask_png(seg: &engine::Segmentation, p: &Params) -> Vec<u8> {
+    report::mask_png(&render::render_mask(
+        seg,
+        engine::MaskKind::Binary,
+        p.mask_width_px,
+    ))
+}
+
+/// The bundled model on one ONNX Runtime thread.
+fn single_thread_detector() -> OnnxDetector {
+    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
+    OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)")
 }
 
 fn settings(p: &Params) -> SlicSettings {
@@ -93,25 +118,6 @@ fn settings(p: &Params) -> SlicSettings {
         iterations: p.slic_iterations,
         min_size_factor: p.min_size_factor,
     }
-}
-
-/// Decode → engine → binary mask → PNG, as `ariadne segment` and the service do.
-#[divan::bench(sample_count = 30)]
-fn segment_640x480(bencher: divan::Bencher) {
-    let fx = fixtures();
-    let p = Params::default();
-    let mut i = 0;
-    bencher.bench_local(|| {
-        let f = &fx[i % fx.len()];
-        i += 1;
-        let image = decode::decode_rgb(&f.jpeg, u64::MAX).unwrap();
-        let seg = engine::segment(&image, &f.ends, &p).unwrap();
-        report::mask_png(&render::render_mask(
-            &seg,
-            engine::MaskKind::Binary,
-            p.mask_width_px,
-        ))
-    });
 }
 
 #[divan::bench(sample_count = 30)]
@@ -125,12 +131,7 @@ fn decode_jpeg_640x480(bencher: divan::Bencher) {
 fn superpixels_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let p = Params::default();
-    bencher.bench_local(|| {
-        let img = &fx[0].image;
-        let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
-        lab.gaussian_blur(p.sigma);
-        slic(&lab, &settings(&p))
-    });
+    bencher.bench_local(|| slic(&blurred_lab(&fx[0].image, &p), &settings(&p)));
 }
 
 /// SLIC alone (k-means and connectivity) on a prepared Lab image.
@@ -139,8 +140,7 @@ fn slic_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let p = Params::default();
     let img = &fx[0].image;
-    let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
-    lab.gaussian_blur(p.sigma);
+    let lab = blurred_lab(img, &p);
     bencher.bench_local(|| slic(&lab, &settings(&p)));
 }
 
@@ -149,12 +149,7 @@ fn slic_640x480(bencher: divan::Bencher) {
 fn lab_and_blur_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let p = Params::default();
-    bencher.bench_local(|| {
-        let img = &fx[0].image;
-        let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
-        lab.gaussian_blur(p.sigma);
-        lab
-    });
+    bencher.bench_local(|| blurred_lab(&fx[0].image, &p));
 }
 
 #[divan::bench(sample_count = 30)]
@@ -162,8 +157,7 @@ fn graph_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let p = Params::default();
     let img = &fx[0].image;
-    let mut lab = LabImage::from_rgb(img.as_raw(), img.width() as usize, img.height() as usize);
-    lab.gaussian_blur(p.sigma);
+    let lab = blurred_lab(img, &p);
     let sp = slic(&lab, &settings(&p));
     bencher.bench_local(|| Graph::build(&sp, img.as_raw(), &lab, p.hist_bins));
 }
@@ -173,11 +167,5 @@ fn mask_and_png_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let p = Params::default();
     let seg = engine::segment(&fx[0].image, &fx[0].ends, &p).unwrap();
-    bencher.bench_local(|| {
-        report::mask_png(&render::render_mask(
-            &seg,
-            engine::MaskKind::Binary,
-            p.mask_width_px,
-        ))
-    });
+    bencher.bench_local(|| binary_mask_png(&seg, &p));
 }

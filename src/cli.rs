@@ -268,16 +268,7 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
         EndsSource::Gt => None,
         EndsSource::Detect => Some(OnnxDetector::load(&args.detector, 1)?),
     };
-    let mut results: Vec<ImageResult> = Vec::with_capacity(samples.len());
-    for sample in &samples {
-        let params = if sample.set == "hard" { &hard } else { &simple };
-        let r = eval::evaluate_sample(
-            sample,
-            params,
-            detector
-                .as_ref()
-                .map(|d| d as &dyn crate::detect::EndpointDetector),
-        )?;
+    let print = |r: &ImageResult| {
         if !args.json {
             println!(
                 "{:<7} {}  IoU {:.3}  cables {}/{} found {}  ends {} ({}/{} terminals)  ms: ends {:.1} sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
@@ -299,8 +290,11 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
                 r.timings_ms.total
             );
         }
-        results.push(r);
-    }
+    };
+    let detector = detector
+        .as_ref()
+        .map(|d| d as &dyn crate::detect::EndpointDetector);
+    let results = eval::evaluate_all(&samples, &simple, &hard, detector, print)?;
     let summaries = eval::summarise(&results);
     if args.json {
         let doc = serde_json::json!({ "dataset": dir, "images": results, "sets": summaries });

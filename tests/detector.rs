@@ -5,7 +5,7 @@
 
 use std::process::Command;
 
-use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, OnnxDetector};
+use ariadne_dlo::detect::{DetectorArgs, Ends, OnnxDetector};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
 use clap::Parser;
 
@@ -32,12 +32,7 @@ fn bundled_model_finds_the_terminals() {
             let bytes = std::fs::read(&s.image).unwrap();
             let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
             let terminals = eval::terminal_ends(&s.cables, image.width(), image.height());
-            let ends: Vec<[f64; 2]> = detector
-                .detect(&image)
-                .unwrap()
-                .iter()
-                .map(|d| d.point)
-                .collect();
+            let ends = Ends::detected(&detector, &image).unwrap().points;
             hits += eval::match_points(&ends, &terminals, TERMINAL_MATCH_PX);
             truth += terminals.len();
             found += ends.len();
@@ -63,16 +58,11 @@ fn detected_ends_segment_the_development_split() {
     let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
     let simple = ariadne_dlo::engine::Params::preset("default").unwrap();
     let hard = ariadne_dlo::engine::Params::preset("clutter").unwrap();
-    let results: Vec<eval::ImageResult> = samples
-        .iter()
-        .map(|s| {
-            let params = if s.set == "hard" { &hard } else { &simple };
-            eval::evaluate_sample(s, params, Some(&detector)).unwrap()
-        })
-        .collect();
-    let sets = eval::summarise(&results);
-    let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;
-    let (simple_iou, hard_iou) = (get("simple"), get("hard"));
+    let results = eval::evaluate_all(&samples, &simple, &hard, Some(&detector), |_| {}).unwrap();
+    let (simple_iou, hard_iou) = (
+        eval::weighted_iou(&results, "simple"),
+        eval::weighted_iou(&results, "hard"),
+    );
     eprintln!("detected ends, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");
     assert!(hard_iou >= 0.40, "hard {hard_iou:.3}");

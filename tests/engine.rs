@@ -175,15 +175,11 @@ fn development_split_accuracy_floors() {
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
     let simple = Params::preset("default").unwrap();
     let hard = Params::preset("clutter").unwrap();
-    let results: Vec<eval::ImageResult> = samples
-        .iter()
-        .map(|s| {
-            eval::evaluate_sample(s, if s.set == "hard" { &hard } else { &simple }, None).unwrap()
-        })
-        .collect();
-    let sets = eval::summarise(&results);
-    let get = |name: &str| sets.iter().find(|s| s.set == name).unwrap().weighted_iou;
-    let (simple_iou, hard_iou) = (get("simple"), get("hard"));
+    let results = eval::evaluate_all(&samples, &simple, &hard, None, |_| {}).unwrap();
+    let (simple_iou, hard_iou) = (
+        eval::weighted_iou(&results, "simple"),
+        eval::weighted_iou(&results, "hard"),
+    );
     eprintln!("weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= 0.70, "simple {simple_iou:.3}");
     assert!(hard_iou >= 0.60, "hard {hard_iou:.3}");

@@ -130,6 +130,34 @@ pub fn evaluate_sample(
     })
 }
 
+/// Evaluates every sample, the `hard` set with `hard` and the others with `simple`,
+/// calling `each` with every result as it is ready.
+pub fn evaluate_all(
+    samples: &[Sample],
+    simple: &Params,
+    hard: &Params,
+    detector: Option<&dyn EndpointDetector>,
+    mut each: impl FnMut(&ImageResult),
+) -> Result<Vec<ImageResult>, DatasetError> {
+    samples
+        .iter()
+        .map(|s| {
+            let params = if s.set == "hard" { hard } else { simple };
+            let r = evaluate_sample(s, params, detector)?;
+            each(&r);
+            Ok(r)
+        })
+        .collect()
+}
+
+/// Weighted IoU of the set named `set`, 0 when there is none.
+pub fn weighted_iou(results: &[ImageResult], set: &str) -> f64 {
+    summarise(results)
+        .iter()
+        .find(|s| s.set == set)
+        .map_or(0.0, |s| s.weighted_iou)
+}
+
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
