@@ -6,7 +6,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use image::RgbImage;
-use image::imageops::{self, FilterType};
 use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
@@ -157,24 +156,72 @@ fn build_session(
 }
 
 /// The photo resized into the network input as planar RGB in [0, 1], padding grey.
+///
+/// Separable triangle filter stretched by the reduction factor (antialiased bilinear,
+/// as PIL, which made the training inputs, and `image` do), computed in f32 straight
+/// into the planar tensor: no intermediate 8-bit image.
 fn input_tensor(image: &RgbImage, fit: Letterbox) -> Vec<f32> {
     let [w, h] = fit.input;
-    let [rw, rh] = fit.resized();
-    let resized = if [rw, rh] == [image.width(), image.height()] {
-        image.clone()
-    } else {
-        imageops::resize(image, rw, rh, FilterType::Triangle)
-    };
+    let [rw, rh] = fit.resized().map(|v| v as usize);
+    let (sw, sh) = (image.width() as usize, image.height() as usize);
+    let columns = triangle_weights(sw, rw);
+    let rows = triangle_weights(sh, rh);
+    // Horizontal pass: every source row, resized columns, one plane per channel.
+    let mut narrow = vec![0.0f32; 3 * sh * rw];
+    for (y, src) in image.as_raw().chunks_exact(sw * 3).enumerate() {
+        for (x, (first, weights)) in columns.iter().enumerate() {
+            let mut acc = [0.0f32; 3];
+            for (k, &wk) in weights.iter().enumerate() {
+                let px = &src[(first + k) * 3..(first + k) * 3 + 3];
+                for c in 0..3 {
+                    acc[c] += wk * px[c] as f32;
+                }
+            }
+            for (c, v) in acc.iter().enumerate() {
+                narrow[c * sh * rw + y * rw + x] = v / 255.0;
+            }
+        }
+    }
+    // Vertical pass into the padded input, a whole row at a time.
     let mut tensor = vec![PAD; 3 * w * h];
-    let (rw, rh) = (rw as usize, rh as usize);
-    for (y, row) in resized.as_raw().chunks_exact(rw * 3).take(rh).enumerate() {
-        for (x, px) in row.chunks_exact(3).enumerate() {
-            for (c, &v) in px.iter().enumerate() {
-                tensor[c * w * h + y * w + x] = v as f32 / 255.0;
+    for c in 0..3 {
+        let plane = &narrow[c * sh * rw..(c + 1) * sh * rw];
+        for (y, (first, weights)) in rows.iter().enumerate() {
+            let out = &mut tensor[c * w * h + y * w..c * w * h + y * w + rw];
+            out.fill(0.0);
+            for (k, &wk) in weights.iter().enumerate() {
+                let src = &plane[(first + k) * rw..(first + k + 1) * rw];
+                for (o, &v) in out.iter_mut().zip(src) {
+                    *o += wk * v;
+                }
             }
         }
     }
     tensor
+}
+
+/// For each of `dst` output samples over `src` input samples: the first input index and
+/// the normalised weights of the triangle filter, widened by the reduction factor.
+fn triangle_weights(src: usize, dst: usize) -> Vec<(usize, Vec<f32>)> {
+    let scale = src as f32 / dst as f32;
+    let support = scale.max(1.0);
+    (0..dst)
+        .map(|o| {
+            let centre = (o as f32 + 0.5) * scale;
+            let lo = (centre - support).floor().max(0.0) as usize;
+            let hi = ((centre + support).ceil() as usize).clamp(lo + 1, src);
+            let mut weights: Vec<f32> = (lo..hi)
+                .map(|x| (1.0 - ((x as f32 + 0.5 - centre) / support).abs()).max(0.0))
+                .collect();
+            let sum: f32 = weights.iter().sum();
+            if sum > 0.0 {
+                weights.iter_mut().for_each(|v| *v /= sum);
+            } else {
+                weights.iter_mut().for_each(|v| *v = 1.0 / (hi - lo) as f32);
+            }
+            (lo, weights)
+        })
+        .collect()
 }
 
 /// Loads the ONNX Runtime library once per process and builds its environment.
@@ -208,6 +255,27 @@ fn runtime(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resizing_matches_an_antialiased_bilinear_resize() {
+        let image = RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([(x * 4) as u8, (y * 5) as u8, ((x * y) % 256) as u8])
+        });
+        let fit = Letterbox::fit(64, 48, [32, 24]);
+        let ours = input_tensor(&image, fit);
+        let reference =
+            image::imageops::resize(&image, 32, 24, image::imageops::FilterType::Triangle);
+        for (i, px) in reference.pixels().enumerate() {
+            for c in 0..3 {
+                let got = ours[c * 32 * 24 + i] * 255.0;
+                assert!(
+                    (got - px[c] as f32).abs() <= 1.0,
+                    "pixel {i} channel {c}: {got} vs {}",
+                    px[c]
+                );
+            }
+        }
+    }
 
     #[test]
     fn input_tensor_is_planar_and_padded() {
