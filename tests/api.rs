@@ -31,6 +31,18 @@ impl TestApp {
         format!("{}{}", self.base, path)
     }
 
+    /// Status code of `GET path`.
+    async fn get_status(&self, path: &str) -> u16 {
+        let response = self.client.get(self.url(path)).send().await.unwrap();
+        response.status().as_u16()
+    }
+
+    /// Body of `GET path` as text.
+    async fn get_text(&self, path: &str) -> String {
+        let response = self.client.get(self.url(path)).send().await.unwrap();
+        response.text().await.unwrap()
+    }
+
     fn stop(&mut self) {
         if let Some(tx) = self.shutdown.take() {
             let _ = tx.send(());
@@ -247,15 +259,7 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
     assert!(cables.len() >= 4, "{} cables", cables.len());
     assert!(ends.iter().filter(|e| e["cable"].is_u64()).count() >= 4);
     assert!(body["timings_ms"]["endpoints"].as_f64().unwrap() > 0.0);
-    let metrics = app
-        .client
-        .get(app.url("/metrics"))
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let metrics = app.get_text("/metrics").await;
     let inferences = metric_value(
         &metrics,
         "ariadne_stage_duration_seconds_count",
@@ -542,15 +546,7 @@ async fn deadline_gives_504() {
     let response = slow_request(&app).send().await.unwrap();
     expect_error(response, 504, "deadline_exceeded").await;
     // The server is fine afterwards.
-    assert_eq!(
-        app.client
-            .get(app.url("/healthz"))
-            .send()
-            .await
-            .unwrap()
-            .status(),
-        200
-    );
+    assert_eq!(app.get_status("/healthz").await, 200);
 }
 
 fn metric_value(text: &str, name: &str, labels: &[&str]) -> f64 {
@@ -563,22 +559,12 @@ fn metric_value(text: &str, name: &str, labels: &[&str]) -> f64 {
 #[tokio::test(flavor = "multi_thread")]
 async fn metrics_change_after_requests() {
     let app = spawn_app(&[]).await;
-    let scrape = || async {
-        app.client
-            .get(app.url("/metrics"))
-            .send()
-            .await
-            .unwrap()
-            .text()
-            .await
-            .unwrap()
-    };
     let labels = [
         "route=\"/segment\"",
         "status_class=\"2xx\"",
         "preset=\"clutter\"",
     ];
-    let before = scrape().await;
+    let before = app.get_text("/metrics").await;
     let r = app
         .client
         .post(app.url("/segment?preset=clutter"))
@@ -587,7 +573,7 @@ async fn metrics_change_after_requests() {
         .await
         .unwrap();
     assert_eq!(r.status(), 200);
-    let after = scrape().await;
+    let after = app.get_text("/metrics").await;
     let delta = metric_value(&after, "ariadne_requests_total", &labels)
         - metric_value(&before, "ariadne_requests_total", &labels);
     assert!(delta >= 1.0, "requests counter did not move");
@@ -605,29 +591,25 @@ async fn metrics_change_after_requests() {
 #[tokio::test(flavor = "multi_thread")]
 async fn readiness_follows_warm_up_and_shutdown_and_drains_in_flight_work() {
     let mut app = spawn_app_with(&["--shutdown-delay-s", "1"], false).await;
-    let ready = |app: &TestApp| {
-        let (c, u) = (app.client.clone(), app.url("/readyz"));
-        async move { c.get(u).send().await.unwrap().status().as_u16() }
-    };
-    assert_eq!(ready(&app).await, 503, "not ready before warm-up");
     assert_eq!(
-        app.client
-            .get(app.url("/healthz"))
-            .send()
-            .await
-            .unwrap()
-            .status(),
-        200
+        app.get_status("/readyz").await,
+        503,
+        "not ready before warm-up"
     );
+    assert_eq!(app.get_status("/healthz").await, 200);
 
     let mut app2 = spawn_app(&["--shutdown-delay-s", "1"]).await;
-    assert_eq!(ready(&app2).await, 200);
+    assert_eq!(app2.get_status("/readyz").await, 200);
     // A slow request in flight, then the shutdown signal.
     let in_flight = tokio::spawn(slow_request(&app2).send());
     tokio::time::sleep(Duration::from_millis(200)).await;
     app2.stop();
     tokio::time::sleep(Duration::from_millis(100)).await;
-    assert_eq!(ready(&app2).await, 503, "not ready while draining");
+    assert_eq!(
+        app2.get_status("/readyz").await,
+        503,
+        "not ready while draining"
+    );
     let response = in_flight.await.unwrap().unwrap();
     assert_eq!(response.status(), 200, "in-flight request finished");
     let server = tokio::time::timeout(Duration::from_secs(30), app2.server)
