@@ -3,6 +3,8 @@
 
 #![allow(clippy::unwrap_used)] // test code: a failure should panic
 
+mod common;
+
 use std::process::Command;
 
 use ariadne_dlo::detect::{DetectorArgs, Ends, OnnxDetector};
@@ -54,14 +56,7 @@ fn bundled_model_finds_the_terminals() {
 fn detected_ends_segment_the_development_split() {
     let detector =
         OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
-    let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
-    let simple = ariadne_dlo::engine::Params::preset("default").unwrap();
-    let hard = ariadne_dlo::engine::Params::preset("clutter").unwrap();
-    let results = eval::evaluate_all(&samples, &simple, &hard, Some(&detector), |_| {}).unwrap();
-    let (simple_iou, hard_iou) = (
-        eval::weighted_iou(&results, "simple"),
-        eval::weighted_iou(&results, "hard"),
-    );
+    let (simple_iou, hard_iou) = common::split_iou(Some(&detector));
     eprintln!("detected ends, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");
     assert!(hard_iou >= 0.50, "hard {hard_iou:.3}");

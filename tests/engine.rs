@@ -3,6 +3,8 @@
 
 #![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
 
+mod common;
+
 use ariadne_dlo::engine::{self, MaskKind, Params, render};
 use ariadne_dlo::eval;
 use ariadne_dlo::synth::{Background, SceneSpec, scene};
@@ -170,16 +172,7 @@ fn bad_parameters_and_ends_are_errors_not_panics() {
 /// floors (measured values in the README, Accuracy).
 #[test]
 fn development_split_accuracy_floors() {
-    let dir = eval::default_dataset_dir();
-    let samples = eval::load_dataset(&dir)
-        .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
-    let simple = Params::preset("default").unwrap();
-    let hard = Params::preset("clutter").unwrap();
-    let results = eval::evaluate_all(&samples, &simple, &hard, None, |_| {}).unwrap();
-    let (simple_iou, hard_iou) = (
-        eval::weighted_iou(&results, "simple"),
-        eval::weighted_iou(&results, "hard"),
-    );
+    let (simple_iou, hard_iou) = common::split_iou(None);
     eprintln!("weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= 0.70, "simple {simple_iou:.3}");
     assert!(hard_iou >= 0.60, "hard {hard_iou:.3}");

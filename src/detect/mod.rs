@@ -33,6 +33,9 @@ pub trait EndpointDetector: Send + Sync {
 /// Errors loading or running a detector.
 #[derive(Debug, thiserror::Error)]
 pub enum DetectError {
+    /// A detector setting is out of range.
+    #[error("detector settings: {0}")]
+    Settings(String),
     /// ONNX Runtime's shared library is missing or unusable.
     #[error("ONNX Runtime: {0}")]
     Runtime(String),

@@ -57,7 +57,7 @@ impl OnnxDetector {
     /// using `args.ort_threads` threads, then runs one warm-up inference so that a bad
     /// model fails here rather than on the first request.
     pub fn load(args: &DetectorArgs, sessions: usize) -> Result<Self, DetectError> {
-        args.validate().map_err(DetectError::Runtime)?;
+        args.validate().map_err(DetectError::Settings)?;
         let environment = runtime(args.ort_library.as_deref())?;
         if !args.model.is_file() {
             return Err(DetectError::Model {

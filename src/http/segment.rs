@@ -319,14 +319,9 @@ async fn read_body(
         return Ok((image, ends, options));
     }
     if content_type.starts_with("image/jpeg") || content_type.starts_with("image/png") {
-        let body = Bytes::from_request(request, state).await.map_err(|e| {
-            if e.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
-                metrics::reject("body_too_large");
-                too_large_body(state.config.max_body_bytes)
-            } else {
-                ApiError::bad_request("bad_body", e.body_text())
-            }
-        })?;
+        let body = Bytes::from_request(request, state)
+            .await
+            .map_err(|e| body_error(state, e.status(), e.body_text(), "bad_body"))?;
         if body.is_empty() {
             return Err(ApiError::bad_request(
                 "empty_image",
@@ -348,11 +343,22 @@ fn too_large_body(limit: usize) -> ApiError {
 }
 
 fn multipart_error(state: &AppState, e: axum::extract::multipart::MultipartError) -> ApiError {
-    if e.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
+    body_error(state, e.status(), e.body_text(), "bad_multipart")
+}
+
+/// A body that could not be read: over the limit (413, counted), or malformed (400 with
+/// `code`).
+fn body_error(
+    state: &AppState,
+    status: axum::http::StatusCode,
+    text: String,
+    code: &'static str,
+) -> ApiError {
+    if status == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
         metrics::reject("body_too_large");
         too_large_body(state.config.max_body_bytes)
     } else {
-        ApiError::bad_request("bad_multipart", e.body_text())
+        ApiError::bad_request(code, text)
     }
 }
 
