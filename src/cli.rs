@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use thiserror::Error;
 
 use crate::decode::{DecodeError, decode_rgb};
-use crate::detect::{DetectError, DetectorArgs, Ends, OnnxDetector};
+use crate::detect::{DetectError, DetectorArgs, EndpointDetector, Ends, OnnxDetector};
 use crate::engine::{self, EngineError, MaskKind, Params, render};
 use crate::eval::{self, DatasetError, ImageResult};
 use crate::report::{self, CableReport, SegmentResponse, Timings};
@@ -264,7 +264,7 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
     let samples = eval::load_dataset(&dir)?;
     let simple = params_from(&args.preset, args.options.as_deref())?;
     let hard = params_from(&args.hard_preset, args.options.as_deref())?;
-    let detector = match args.endpoints {
+    let loaded = match args.endpoints {
         EndsSource::Gt => None,
         EndsSource::Detect => Some(OnnxDetector::load(&args.detector, 1)?),
     };
@@ -291,9 +291,7 @@ fn evaluate(args: &EvalArgs) -> Result<(), CliError> {
             );
         }
     };
-    let detector = detector
-        .as_ref()
-        .map(|d| d as &dyn crate::detect::EndpointDetector);
+    let detector = loaded.as_ref().map(|d| d as &dyn EndpointDetector);
     let results = eval::evaluate_all(&samples, &simple, &hard, detector, print)?;
     let summaries = eval::summarise(&results);
     if args.json {

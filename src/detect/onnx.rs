@@ -54,8 +54,7 @@ impl std::fmt::Debug for OnnxDetector {
 
 impl OnnxDetector {
     /// Loads ONNX Runtime (once per process) and `sessions` copies of the model, each
-    /// using `args.ort_threads` threads, then runs one warm-up inference so that a bad
-    /// model fails here rather than on the first request.
+    /// using `args.ort_threads` threads, and runs each once on a grey image.
     pub fn load(args: &DetectorArgs, sessions: usize) -> Result<Self, DetectError> {
         args.validate().map_err(DetectError::Settings)?;
         let environment = runtime(args.ort_library.as_deref())?;
@@ -78,17 +77,42 @@ impl OnnxDetector {
                 nms_radius_px: args.detect_nms_px,
             },
         };
-        detector
-            .detect(&RgbImage::from_pixel(
-                args.model_input_width as u32,
-                args.model_input_height as u32,
-                image::Rgb([128, 128, 128]),
-            ))
-            .map_err(|e| DetectError::Model {
-                path: args.model.clone(),
-                message: format!("warm-up inference: {e}"),
-            })?;
+        // Every session runs once now: a bad model fails here, and no worker's first
+        // request pays for ONNX Runtime's lazy set-up.
+        let grey = RgbImage::from_pixel(
+            args.model_input_width as u32,
+            args.model_input_height as u32,
+            image::Rgb([128, 128, 128]),
+        );
+        for session in &detector.sessions {
+            let mut session = session.lock().unwrap_or_else(PoisonError::into_inner);
+            detector
+                .run(&mut session, &grey)
+                .map_err(|e| DetectError::Model {
+                    path: args.model.clone(),
+                    message: format!("warm-up inference: {e}"),
+                })?;
+        }
         Ok(detector)
+    }
+
+    /// Resizes `image` into the input, runs `session` and decodes its output.
+    fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Vec<Detection>, DetectError> {
+        let fit = Letterbox::fit(image.width(), image.height(), self.input);
+        let tensor = input_tensor(image, fit);
+        let [w, h] = self.input;
+        let input = TensorRef::from_array_view(([1usize, 3, h, w], tensor.as_slice()))
+            .map_err(|e| DetectError::Inference(e.to_string()))?;
+        let outputs = session
+            .run(ort::inputs![input])
+            .map_err(|e| DetectError::Inference(e.to_string()))?;
+        let (shape, data) = outputs[0]
+            .try_extract_tensor::<f32>()
+            .map_err(|e| DetectError::Output(e.to_string()))?;
+        match self.kind {
+            ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding),
+            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding),
+        }
     }
 
     /// A free session if there is one, else a wait for the next in turn.
@@ -108,22 +132,7 @@ impl OnnxDetector {
 
 impl EndpointDetector for OnnxDetector {
     fn detect(&self, image: &RgbImage) -> Result<Vec<Detection>, DetectError> {
-        let fit = Letterbox::fit(image.width(), image.height(), self.input);
-        let tensor = input_tensor(image, fit);
-        let [w, h] = self.input;
-        let mut session = self.session();
-        let input = TensorRef::from_array_view(([1usize, 3, h, w], tensor.as_slice()))
-            .map_err(|e| DetectError::Inference(e.to_string()))?;
-        let outputs = session
-            .run(ort::inputs![input])
-            .map_err(|e| DetectError::Inference(e.to_string()))?;
-        let (shape, data) = outputs[0]
-            .try_extract_tensor::<f32>()
-            .map_err(|e| DetectError::Output(e.to_string()))?;
-        match self.kind {
-            ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding),
-            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding),
-        }
+        self.run(&mut self.session(), image)
     }
 }
 

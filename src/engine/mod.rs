@@ -282,7 +282,8 @@ fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> Vec<Cable> {
     };
     pairing::pair(&crossing, &confidence, scene.params)
         .iter()
-        .filter(|c| c.score >= MIN_BORDER_CABLE_SCORE && c.far != FarEnd::Open)
+        // Only crossing walks were kept, so every pairing ends on the border or a seed.
+        .filter(|c| c.score >= MIN_BORDER_CABLE_SCORE)
         .filter_map(|c| model_cable(&border_scene, c))
         .map(|mut cable| {
             cable.end_indices = [None, None];

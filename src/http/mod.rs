@@ -188,8 +188,9 @@ fn preset_label(state: &AppState, query: Option<&str>) -> String {
     }
 }
 
-/// Runs one small detection and segmentation on the pool so that the first real request
-/// does not pay for lazy initialisation, then marks the service ready.
+/// Runs one small segmentation on the pool so that the first real request does not pay
+/// for lazy initialisation, then marks the service ready. (The detector has already run
+/// once per session when it was loaded.)
 pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
     let spec = crate::synth::SceneSpec {
         width: 160,
@@ -200,17 +201,11 @@ pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
         seed: 1,
     };
     let params = state.presets.get("default").cloned().unwrap_or_default();
-    let detector = state.detector.clone();
     let job = state
         .pool
-        .try_submit(move || -> Result<usize, ApiError> {
+        .try_submit(move || {
             let scene = crate::synth::scene(&spec);
-            detector.detect(&scene.image)?;
-            Ok(
-                crate::engine::segment(&scene.image, &scene.ends(), &params)?
-                    .cables
-                    .len(),
-            )
+            crate::engine::segment(&scene.image, &scene.ends(), &params).map(|s| s.cables.len())
         })
         .map_err(|_| ApiError::Internal("pool full during warm-up".into()))?;
     let started = job
