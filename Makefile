@@ -8,8 +8,9 @@ setup:
 run: setup
 	cargo run --release -- serve
 
+# --release: one optimised build shared with `make run` and `cargo bench`.
 test: setup lint deploy-check
-	cargo test --all-targets
+	cargo test --release --all-targets
 
 lint:
 	cargo fmt --check

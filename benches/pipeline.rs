@@ -6,12 +6,13 @@
 
 #![allow(clippy::unwrap_used)] // test and benchmark code: a failure should panic
 
-use ariadne_dlo::detect::{DetectorArgs, EndpointDetector, Ends, OnnxDetector};
+use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
-use ariadne_dlo::engine::{self, Params, render};
-use ariadne_dlo::{decode, eval, report};
+use ariadne_dlo::engine::{self, MaskKind, Params, render};
+use ariadne_dlo::pipeline::{self, EndsSource};
+use ariadne_dlo::{decode, eval};
 
 fn main() {
     divan::main();
@@ -39,12 +40,6 @@ fn fixtures() -> Vec<Fixture> {
         .collect()
 }
 
-#[derive(clap::Parser)]
-struct DetectorFlags {
-    #[command(flatten)]
-    args: DetectorArgs,
-}
-
 /// Endpoint detection with the bundled model, ONNX Runtime on one thread: resize,
 /// inference, decoding. Needs `make setup`.
 #[divan::bench(sample_count = 50)]
@@ -62,30 +57,37 @@ fn detect_endpoints_640x480(bencher: divan::Bencher) {
 #[divan::bench(sample_count = 30)]
 fn segment_with_detection_640x480(bencher: divan::Bencher) {
     let detector = single_thread_detector();
-    bench_segment(bencher, |_, image| {
-        Ends::detected(&detector, image).unwrap()
-    });
+    bench_segment(bencher, Some(&detector));
 }
 
 /// Decode → engine → binary mask → PNG, as `ariadne segment` and the service do.
 #[divan::bench(sample_count = 30)]
 fn segment_640x480(bencher: divan::Bencher) {
-    bench_segment(bencher, |f, _| Ends::given(f.ends.clone()));
+    bench_segment(bencher, None);
 }
 
-/// Decode → ends → engine → binary mask PNG over the fixtures in turn.
-fn bench_segment(bencher: divan::Bencher, ends: impl Fn(&Fixture, &image::RgbImage) -> Ends) {
+/// The pipeline (decode → ends → engine → binary mask PNG) over the fixtures in turn,
+/// with ends from `detector`, or the true ones without.
+fn bench_segment(bencher: divan::Bencher, detector: Option<&dyn EndpointDetector>) {
     let fx = fixtures();
     let p = Params::default();
     let mut i = 0;
     bencher.bench_local(|| {
         let f = &fx[i % fx.len()];
         i += 1;
-        let image = decode::decode_rgb(&f.jpeg, u64::MAX).unwrap();
-        let ends = ends(f, &image);
-        let seg =
-            engine::segment_with_confidence(&image, &ends.points, &ends.confidences, &p).unwrap();
-        binary_mask_png(&seg, &p)
+        pipeline::run(&pipeline::Job {
+            bytes: &f.jpeg,
+            ends: match detector {
+                Some(d) => EndsSource::Detect(d),
+                None => EndsSource::Given(&f.ends),
+            },
+            params: &p,
+            max_pixels: u64::MAX,
+            mask: MaskKind::Binary,
+            overlay: false,
+            encode: true,
+        })
+        .unwrap()
     });
 }
 
@@ -98,17 +100,16 @@ fn blurred_lab(img: &image::RgbImage, p: &Params) -> LabImage {
 
 /// The binary mask of `seg` as PNG bytes, as the service sends it.
 fn binary_mask_png(seg: &engine::Segmentation, p: &Params) -> Vec<u8> {
-    report::mask_png(&render::render_mask(
-        seg,
-        engine::MaskKind::Binary,
-        p.mask_width_px,
-    ))
+    pipeline::mask_png(&render::render_mask(seg, MaskKind::Binary, p.mask_width_px)).unwrap()
 }
 
 /// The bundled model on one ONNX Runtime thread.
 fn single_thread_detector() -> OnnxDetector {
-    let args = <DetectorFlags as clap::Parser>::parse_from(["bench", "--ort-threads", "1"]).args;
-    OnnxDetector::load(&args, 1).expect("bundled model (run `make setup`)")
+    let config = DetectorConfig {
+        ort_threads: 1,
+        ..DetectorConfig::default()
+    };
+    OnnxDetector::load(&config, 1).expect("bundled model (run `make setup`)")
 }
 
 fn settings(p: &Params) -> SlicSettings {

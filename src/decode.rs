@@ -103,12 +103,7 @@ mod tests {
     use super::*;
 
     fn png_bytes(w: u32, h: u32) -> Vec<u8> {
-        crate::report::png(
-            &vec![7u8; (w * h * 3) as usize],
-            w,
-            h,
-            image::ExtendedColorType::Rgb8,
-        )
+        crate::pipeline::rgb_png(&RgbImage::from_pixel(w, h, image::Rgb([7, 7, 7]))).unwrap()
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! The JSON document describing one segmentation, shared by `ariadne segment --json`
-//! and `POST /segment`, plus PNG encoding of masks.
+//! and `POST /segment`.
 
 use base64::Engine as _;
-use image::{ImageEncoder, codecs::png::PngEncoder};
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
-use crate::engine::{Cable, Mask, Segmentation};
+use crate::engine::{Cable, Segmentation};
+use crate::pipeline::Output;
+pub use crate::timings::Timings;
 
 /// Result of segmenting one image.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -73,39 +74,21 @@ pub struct EndpointReport {
     pub cable: Option<usize>,
 }
 
-/// Stage timings, milliseconds.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, ToSchema)]
-pub struct Timings {
-    /// Waiting for a worker.
-    pub queue: f64,
-    /// Image decoding.
-    pub decode: f64,
-    /// Endpoint detection (0 when ends were given).
-    pub endpoints: f64,
-    /// Colour conversion, blur and SLIC.
-    pub superpixels: f64,
-    /// Region adjacency graph.
-    pub graph: f64,
-    /// Walks and pairing.
-    pub walks: f64,
-    /// Spline fits and refinement.
-    pub splines: f64,
-    /// Mask (and overlay) drawing.
-    pub mask: f64,
-    /// PNG and JSON encoding.
-    pub encode: f64,
-    /// Whole request, from arrival to response.
-    pub total: f64,
-}
-
-impl Timings {
-    /// Copies the engine's stage times in.
-    pub fn with_engine(mut self, seg: &Segmentation) -> Self {
-        self.superpixels = seg.timings.superpixels;
-        self.graph = seg.timings.graph;
-        self.walks = seg.timings.walks;
-        self.splines = seg.timings.splines;
-        self
+impl SegmentResponse {
+    /// The document of a pipeline's output (its mask and overlay PNGs base64-encoded;
+    /// an output made without encoding gets an empty `mask_png`).
+    pub fn new(output: &Output, request_id: String) -> Self {
+        let seg = &output.segmentation;
+        Self {
+            request_id,
+            width: seg.width,
+            height: seg.height,
+            cables: seg.cables.iter().map(CableReport::from).collect(),
+            endpoints: endpoint_reports(seg, &output.ends.points, &output.ends.confidences),
+            mask_png: output.mask_png.as_deref().map(base64).unwrap_or_default(),
+            overlay_png: output.overlay_png.as_deref().map(base64),
+            timings_ms: output.timings,
+        }
     }
 }
 
@@ -134,7 +117,7 @@ pub fn parse_endpoints(text: &str) -> Result<Vec<[f64; 2]>, String> {
 }
 
 /// Reports every end of `ends` with its confidence and the cable `seg` assigned it to.
-pub fn endpoint_reports(
+fn endpoint_reports(
     seg: &Segmentation,
     ends: &[[f64; 2]],
     confidences: &[f32],
@@ -149,40 +132,7 @@ pub fn endpoint_reports(
         .collect()
 }
 
-/// Encodes a mask as PNG bytes.
-pub fn mask_png(mask: &Mask) -> Vec<u8> {
-    match mask {
-        Mask::Gray(img) => png(
-            img.as_raw(),
-            img.width(),
-            img.height(),
-            image::ExtendedColorType::L8,
-        ),
-        Mask::Rgb(img) => png(
-            img.as_raw(),
-            img.width(),
-            img.height(),
-            image::ExtendedColorType::Rgb8,
-        ),
-    }
-}
-
-/// Encodes raw 8-bit pixels as PNG (fast compression: masks compress well anyway).
-pub fn png(raw: &[u8], width: u32, height: u32, kind: image::ExtendedColorType) -> Vec<u8> {
-    let mut out = Vec::new();
-    let encoder = PngEncoder::new_with_quality(
-        &mut out,
-        image::codecs::png::CompressionType::Fast,
-        image::codecs::png::FilterType::Sub,
-    );
-    // Writing to a Vec with matching dimensions cannot fail.
-    if encoder.write_image(raw, width, height, kind).is_err() {
-        out.clear();
-    }
-    out
-}
-
 /// Base64 (standard alphabet, padded) of `bytes`.
-pub fn base64(bytes: &[u8]) -> String {
+fn base64(bytes: &[u8]) -> String {
     base64::engine::general_purpose::STANDARD.encode(bytes)
 }

@@ -33,15 +33,6 @@ impl Rng {
     }
 }
 
-/// An image of uniform random bytes (for property tests).
-pub fn noise_rgb(width: u32, height: u32, seed: u64) -> RgbImage {
-    let mut rng = Rng::new(seed);
-    RgbImage::from_fn(width, height, |_, _| {
-        let v = rng.next_u64();
-        Rgb([v as u8, (v >> 8) as u8, (v >> 16) as u8])
-    })
-}
-
 /// A PNG that is only a signature and an IHDR chunk (correct CRC) announcing
 /// `width` x `height` RGB pixels, with no pixel data: the "pixel bomb" a server must
 /// refuse from the header alone.

@@ -7,7 +7,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use ariadne_dlo::http::{Presets, ServeArgs};
+use ariadne_dlo::cli::ServeArgs;
+use ariadne_dlo::detect::DetectorConfig;
+use ariadne_dlo::http::{Presets, ServeConfig};
 use clap::{CommandFactory, Parser};
 use serde::Deserialize;
 use serde_yaml::Value;
@@ -60,7 +62,7 @@ fn known_env() -> Vec<String> {
 }
 
 fn default_port() -> u16 {
-    Wrapper::parse_from(["test"]).args.bind.port()
+    ServeConfig::default().bind.port()
 }
 
 fn route_paths() -> Vec<String> {
@@ -253,7 +255,7 @@ fn dockerfile_matches_the_code() {
             );
         }
     }
-    let model = Wrapper::parse_from(["test"]).args.detector.model;
+    let model = DetectorConfig::default().model;
     assert!(
         text.contains(&format!("COPY {} ", model.display())),
         "the bundled model is copied"

@@ -7,26 +7,15 @@ mod common;
 
 use std::process::Command;
 
-use ariadne_dlo::detect::{DetectorArgs, Ends, OnnxDetector};
+use ariadne_dlo::detect::{DetectorConfig, Ends, OnnxDetector};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
-use clap::Parser;
-
-#[derive(Parser)]
-struct Wrapper {
-    #[command(flatten)]
-    args: DetectorArgs,
-}
-
-fn default_args() -> DetectorArgs {
-    Wrapper::parse_from(["test"]).args
-}
 
 /// Terminal recall and precision at 15 px over a whole set. The floors sit below the
 /// measured figures (README) so that they guard against regressions, not noise.
 #[test]
 fn bundled_model_finds_the_terminals() {
-    let detector =
-        OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
+    let detector = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
     let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
     for (set, min_recall, min_precision) in [("simple", 0.85, 0.80), ("hard", 0.65, 0.65)] {
         let (mut hits, mut truth, mut found) = (0, 0, 0);
@@ -54,8 +43,8 @@ fn bundled_model_finds_the_terminals() {
 /// floors (measured values in the README, Accuracy).
 #[test]
 fn detected_ends_segment_the_development_split() {
-    let detector =
-        OnnxDetector::load(&default_args(), 1).expect("bundled model (run `make setup`)");
+    let detector = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
     let (simple_iou, hard_iou) = common::split_iou(Some(&detector));
     eprintln!("detected ends, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= 0.65, "simple {simple_iou:.3}");

@@ -9,8 +9,8 @@ mod onnx;
 pub mod output;
 
 use std::path::PathBuf;
+use std::str::FromStr;
 
-use clap::ValueEnum;
 use image::RgbImage;
 
 pub use onnx::{OnnxDetector, default_runtime_candidates};
@@ -56,7 +56,7 @@ pub enum DetectError {
 }
 
 /// The output convention of a model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ModelKind {
     /// Keypoint heatmap `[1, 1 or 3, H/s, W/s]` (the bundled model).
     Heatmap,
@@ -64,42 +64,56 @@ pub enum ModelKind {
     Yolo,
 }
 
-/// Detector settings, shared by `ariadne serve`, `segment` and `eval`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct DetectorArgs {
+impl FromStr for ModelKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        crate::choice::parse(
+            s,
+            &[("heatmap", Self::Heatmap), ("yolo", Self::Yolo)],
+            "model kind",
+        )
+    }
+}
+
+/// Detector settings, shared by `ariadne serve`, `segment` and `eval` (the command line
+/// fills them from flags; tests build them directly).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DetectorConfig {
     /// ONNX model of cable ends.
-    #[arg(long, env = "ARIADNE_MODEL", default_value = "models/endpoints.onnx")]
     pub model: PathBuf,
     /// Output convention of the model.
-    #[arg(
-        long,
-        env = "ARIADNE_MODEL_KIND",
-        value_enum,
-        default_value = "heatmap"
-    )]
     pub model_kind: ModelKind,
     /// Network input width; the photo is resized to fit, keeping its aspect ratio.
-    #[arg(long, env = "ARIADNE_MODEL_INPUT_WIDTH", default_value_t = 320)]
     pub model_input_width: usize,
     /// Network input height.
-    #[arg(long, env = "ARIADNE_MODEL_INPUT_HEIGHT", default_value_t = 240)]
     pub model_input_height: usize,
     /// Lowest detection confidence kept as an end.
-    #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = 0.35)]
     pub detect_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
-    #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = 20.0)]
     pub detect_nms_px: f64,
     /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
-    #[arg(long, env = "ARIADNE_ORT_THREADS", default_value_t = 1)]
     pub ort_threads: usize,
-    /// ONNX Runtime shared library (libonnxruntime.so 1.31) [default: .ort/, next to
-    /// the executable, /usr/local/lib; `make setup` fetches it].
-    #[arg(long, env = "ORT_DYLIB_PATH")]
+    /// ONNX Runtime shared library; `None` looks in the default places
+    /// ([`default_runtime_candidates`]).
     pub ort_library: Option<PathBuf>,
 }
 
-impl DetectorArgs {
+impl Default for DetectorConfig {
+    fn default() -> Self {
+        Self {
+            model: PathBuf::from("models/endpoints.onnx"),
+            model_kind: ModelKind::Heatmap,
+            model_input_width: 320,
+            model_input_height: 240,
+            detect_threshold: 0.35,
+            detect_nms_px: 20.0,
+            ort_threads: 1,
+            ort_library: None,
+        }
+    }
+}
+
+impl DetectorConfig {
     /// Checks values a model cannot be run with.
     pub fn validate(&self) -> Result<(), String> {
         if self.model_input_width < 8 || self.model_input_height < 8 {

@@ -11,7 +11,7 @@ use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
 use super::output::{self, Decoding, Letterbox};
-use super::{DetectError, Detection, DetectorArgs, EndpointDetector, ModelKind};
+use super::{DetectError, Detection, DetectorConfig, EndpointDetector, ModelKind};
 
 /// File name of the ONNX Runtime library this build is made for.
 const RUNTIME_FILE: &str = "libonnxruntime.so.1.31.1";
@@ -54,34 +54,34 @@ impl std::fmt::Debug for OnnxDetector {
 
 impl OnnxDetector {
     /// Loads ONNX Runtime (once per process) and `sessions` copies of the model, each
-    /// using `args.ort_threads` threads, and runs each once on a grey image.
-    pub fn load(args: &DetectorArgs, sessions: usize) -> Result<Self, DetectError> {
-        args.validate().map_err(DetectError::Settings)?;
-        let environment = runtime(args.ort_library.as_deref())?;
-        if !args.model.is_file() {
+    /// using `config.ort_threads` threads, and runs each once on a grey image.
+    pub fn load(config: &DetectorConfig, sessions: usize) -> Result<Self, DetectError> {
+        config.validate().map_err(DetectError::Settings)?;
+        let environment = runtime(config.ort_library.as_deref())?;
+        if !config.model.is_file() {
             return Err(DetectError::Model {
-                path: args.model.clone(),
+                path: config.model.clone(),
                 message: "no such file (set --model / ARIADNE_MODEL)".into(),
             });
         }
         let sessions = (0..sessions.max(1))
-            .map(|_| build_session(environment, args).map(Mutex::new))
+            .map(|_| build_session(environment, config).map(Mutex::new))
             .collect::<Result<Vec<_>, _>>()?;
         let detector = Self {
             sessions,
             next: AtomicUsize::new(0),
-            kind: args.model_kind,
-            input: [args.model_input_width, args.model_input_height],
+            kind: config.model_kind,
+            input: [config.model_input_width, config.model_input_height],
             decoding: Decoding {
-                threshold: args.detect_threshold,
-                nms_radius_px: args.detect_nms_px,
+                threshold: config.detect_threshold,
+                nms_radius_px: config.detect_nms_px,
             },
         };
         // Every session runs once now: a bad model fails here, and no worker's first
         // request pays for ONNX Runtime's lazy set-up.
         let grey = RgbImage::from_pixel(
-            args.model_input_width as u32,
-            args.model_input_height as u32,
+            config.model_input_width as u32,
+            config.model_input_height as u32,
             image::Rgb([128, 128, 128]),
         );
         for session in &detector.sessions {
@@ -89,7 +89,7 @@ impl OnnxDetector {
             detector
                 .run(&mut session, &grey)
                 .map_err(|e| DetectError::Model {
-                    path: args.model.clone(),
+                    path: config.model.clone(),
                     message: format!("warm-up inference: {e}"),
                 })?;
         }
@@ -140,10 +140,10 @@ impl EndpointDetector for OnnxDetector {
 /// share the CPUs with the rest of the pipeline).
 fn build_session(
     environment: &ort::environment::Environment,
-    args: &DetectorArgs,
+    config: &DetectorConfig,
 ) -> Result<Session, DetectError> {
     let model_error = |message: String| DetectError::Model {
-        path: args.model.clone(),
+        path: config.model.clone(),
         message,
     };
     let mut builder = Session::builder(environment).map_err(|e| model_error(e.to_string()))?;
@@ -151,7 +151,7 @@ fn build_session(
         .with_optimization_level(GraphOptimizationLevel::Level3)
         .map_err(|e| model_error(e.to_string()))?;
     builder = builder
-        .with_intra_threads(args.ort_threads)
+        .with_intra_threads(config.ort_threads)
         .map_err(|e| model_error(e.to_string()))?;
     builder = builder
         .with_inter_threads(1)
@@ -160,7 +160,7 @@ fn build_session(
         .with_intra_op_spinning(false)
         .map_err(|e| model_error(e.to_string()))?;
     builder
-        .commit_from_file(&args.model)
+        .commit_from_file(&config.model)
         .map_err(|e| model_error(e.to_string()))
 }
 

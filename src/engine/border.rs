@@ -5,17 +5,13 @@
 //! seed on the border, and only walks that cross the image to another border point
 //! count from it.
 
+use super::Params;
+use super::cable::{Cable, Scene, model_cable};
+use super::geometry::{dist3, median};
 use super::graph::Graph;
+use super::pairing::{self, Pairing};
 use super::superpixels::Superpixels;
-use super::walk::Seed;
-
-/// Lab ΔE from the border's median colour at which a border superpixel stands out.
-const MIN_BORDER_CONTRAST: f32 = 20.0;
-/// Longest run of standing-out border pixels taken for one cable crossing (longer runs
-/// are objects lying along the border, not cables crossing it).
-const MAX_CROSSING_PX: usize = 40;
-/// Shortest run, pixels (JPEG noise and specks).
-const MIN_CROSSING_PX: usize = 3;
+use super::walk::{self, Seed, Walk, WalkEnd};
 
 /// The perimeter pixels in clockwise order from the top-left corner, once each.
 fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
@@ -27,9 +23,64 @@ fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
     out
 }
 
+/// Cables crossing the whole frame, with no end in view: walks from border seeds where
+/// the border shows a colour the cables in `chosen` do not explain, kept when they reach
+/// another border point (see [`border`]). Their ends belong to no given end.
+pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> Vec<Cable> {
+    let Scene {
+        walks, graph, sp, ..
+    } = *scene;
+    let mut covered = vec![false; graph.len()];
+    for choice in chosen {
+        let joined = choice.joined.map(|j| &walks[j].vertices[..]).unwrap_or(&[]);
+        for &v in walks[choice.walk].vertices.iter().chain(joined) {
+            covered[v as usize] = true;
+            for &n in graph.neighbours(v) {
+                covered[n as usize] = true;
+            }
+        }
+    }
+    let seeds = border_seeds(graph, sp, &covered, scene.params);
+    if seeds.is_empty() {
+        return Vec::new();
+    }
+    let p = scene.params;
+    let min_length = p.border_min_steps * sp.step;
+    let crossing: Vec<Walk> = walk::walk_all(graph, scene.lab, &seeds, sp.step, p)
+        .into_iter()
+        .filter(|w| {
+            let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
+            matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
+                && w.length_px >= min_length
+                && (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
+        })
+        .collect();
+    let confidence = vec![p.border_seed_confidence; seeds.len()];
+    let border_scene = Scene {
+        walks: &crossing,
+        seeds: &seeds,
+        ..*scene
+    };
+    pairing::pair(&crossing, &confidence, scene.params)
+        .iter()
+        // Only crossing walks were kept, so every pairing ends on the border or a seed.
+        .filter(|c| c.score >= p.border_min_score)
+        .filter_map(|c| model_cable(&border_scene, c))
+        .map(|mut cable| {
+            cable.end_indices = [None, None];
+            cable
+        })
+        .collect()
+}
+
 /// Seeds on the border where an unexplained cable may cross it; `covered[v]` marks the
 /// superpixels already explained by a cable.
-pub fn border_seeds(graph: &Graph, sp: &Superpixels, covered: &[bool]) -> Vec<Seed> {
+pub fn border_seeds(
+    graph: &Graph,
+    sp: &Superpixels,
+    covered: &[bool],
+    params: &Params,
+) -> Vec<Seed> {
     let (w, h) = (sp.width, sp.height);
     if w < 3 || h < 3 {
         return Vec::new();
@@ -43,18 +94,13 @@ pub fn border_seeds(graph: &Graph, sp: &Superpixels, covered: &[bool]) -> Vec<Se
     let mut background = [0.0; 3];
     for (c, b) in background.iter_mut().enumerate() {
         let mut channel: Vec<f32> = colours.iter().map(|l| l[c]).collect();
-        channel.sort_by(f32::total_cmp);
-        *b = channel[channel.len() / 2];
+        *b = median(&mut channel, f32::total_cmp).unwrap_or(0.0);
     }
     let stands_out: Vec<bool> = labels
         .iter()
         .zip(&colours)
         .map(|(&v, lab)| {
-            let de = (0..3)
-                .map(|c| (lab[c] - background[c]).powi(2))
-                .sum::<f32>()
-                .sqrt();
-            de >= MIN_BORDER_CONTRAST && !covered[v as usize]
+            dist3(*lab, background) >= params.border_min_contrast && !covered[v as usize]
         })
         .collect();
     // Runs of standing-out pixels along the ring (a run may wrap past the start).
@@ -71,7 +117,9 @@ pub fn border_seeds(graph: &Graph, sp: &Superpixels, covered: &[bool]) -> Vec<Se
             continue;
         }
         let run = (i..n).take_while(|&j| stands_out[(start + j) % n]).count();
-        if (MIN_CROSSING_PX..=MAX_CROSSING_PX).contains(&run) {
+        let crossing =
+            params.border_min_crossing_px as usize..=params.border_max_crossing_px as usize;
+        if crossing.contains(&run) {
             let mid = (start + i + run / 2) % n;
             let [x, y] = ring[mid];
             seeds.push(Seed {
@@ -122,10 +170,11 @@ mod tests {
             },
         );
         let graph = Graph::build(&sp, &rgb, &lab, 4);
-        let seeds = border_seeds(&graph, &sp, &vec![false; graph.len()]);
+        let p = Params::default();
+        let seeds = border_seeds(&graph, &sp, &vec![false; graph.len()], &p);
         assert_eq!(seeds.len(), 2, "{seeds:?}");
         assert!(seeds.iter().all(|s| (44.0..52.0).contains(&s.point[0])));
         // Once the stripe is explained, nothing is left to seed.
-        assert!(border_seeds(&graph, &sp, &vec![true; graph.len()]).is_empty());
+        assert!(border_seeds(&graph, &sp, &vec![true; graph.len()], &p).is_empty());
     }
 }

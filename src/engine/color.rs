@@ -262,6 +262,39 @@ mod tests {
         assert_eq!(rgb_to_hsv([128, 64, 64])[0], 0);
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// The row-tap blur equals a direct 2-D convolution with the separable kernel
+        /// and clamped edges.
+        #[test]
+        fn row_tap_blur_matches_a_naive_convolution(
+            w in 1usize..24, h in 1usize..24, sigma in 0.3f32..3.0,
+            values in proptest::collection::vec(-50.0f32..100.0, 24 * 24)
+        ) {
+            let mut plane: Vec<f32> = values[..w * h].to_vec();
+            let original = plane.clone();
+            let kernel = gaussian_kernel(sigma);
+            let r = (kernel.len() / 2) as isize;
+            let mut scratch = vec![0.0; w * h];
+            blur_plane(&mut plane, &mut scratch, w, h, &kernel);
+            let clamp = |v: isize, n: usize| v.clamp(0, n as isize - 1) as usize;
+            for y in 0..h {
+                for x in 0..w {
+                    let mut want = 0.0f64;
+                    for (j, &ky) in kernel.iter().enumerate() {
+                        for (i, &kx) in kernel.iter().enumerate() {
+                            let sx = clamp(x as isize + i as isize - r, w);
+                            let sy = clamp(y as isize + j as isize - r, h);
+                            want += (ky * kx) as f64 * original[sy * w + sx] as f64;
+                        }
+                    }
+                    let got = plane[y * w + x] as f64;
+                    proptest::prop_assert!((got - want).abs() < 1e-3, "({x}, {y}): {got} vs {want}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn blur_preserves_constant_planes_and_mass() {
         let rgb = vec![200u8; 7 * 5 * 3];

@@ -13,7 +13,7 @@ pub enum EngineError {
         /// The rejected value, printed.
         value: String,
         /// What would have been accepted.
-        expected: &'static str,
+        expected: String,
     },
     /// An options object that does not parse as parameter overrides (unknown field,
     /// wrong type).

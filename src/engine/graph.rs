@@ -1,6 +1,6 @@
 //! The region adjacency graph (RAG) of a superpixel segmentation.
 //!
-//! One vertex per superpixel with its centroid, pixel count, mean colour (RGB and Lab)
+//! One vertex per superpixel with its centroid, pixel count, mean Lab colour
 //! and a normalised joint HSV histogram in OpenCV's ranges; an edge between two
 //! superpixels that share a 4-connected boundary; and order-d neighbourhoods by BFS.
 
@@ -14,8 +14,6 @@ pub struct Vertex {
     pub centroid: [f32; 2],
     /// Number of pixels.
     pub pixels: u32,
-    /// Mean sRGB colour, 0..=255 per channel.
-    pub mean_rgb: [f32; 3],
     /// Mean CIELAB colour.
     pub mean_lab: [f32; 3],
 }
@@ -39,7 +37,7 @@ impl Graph {
         let (w, h, n) = (sp.width, sp.height, sp.count);
         let bins = bins.max(1) as usize;
         let cells = bins * bins * bins;
-        let mut sums = vec![[0.0f64; 9]; n];
+        let mut sums = vec![[0.0f64; 6]; n];
         let mut histograms = vec![0.0f32; n * cells];
         // Neighbour lists are short (about 6 per superpixel): a linear scan beats hashing.
         let mut lists: Vec<Vec<u32>> = vec![Vec::with_capacity(8); n];
@@ -63,13 +61,10 @@ impl Graph {
                 let s = &mut sums[k as usize];
                 s[0] += x as f64;
                 s[1] += y as f64;
-                s[2] += px[0] as f64;
-                s[3] += px[1] as f64;
-                s[4] += px[2] as f64;
-                s[5] += lab.l[p] as f64;
-                s[6] += lab.a[p] as f64;
-                s[7] += lab.b[p] as f64;
-                s[8] += 1.0;
+                s[2] += lab.l[p] as f64;
+                s[3] += lab.a[p] as f64;
+                s[4] += lab.b[p] as f64;
+                s[5] += 1.0;
                 let [hh, ss, vv] = rgb_to_hsv(px);
                 let cell = (hh as usize * bins / 180) * bins * bins
                     + (ss as usize * bins / 256) * bins
@@ -80,13 +75,12 @@ impl Graph {
         let vertices: Vec<Vertex> = sums
             .iter()
             .map(|s| {
-                let inv = 1.0 / s[8].max(1.0);
+                let inv = 1.0 / s[5].max(1.0);
                 let f = |i: usize| (s[i] * inv) as f32;
                 Vertex {
                     centroid: [f(0), f(1)],
-                    pixels: s[8] as u32,
-                    mean_rgb: [f(2), f(3), f(4)],
-                    mean_lab: [f(5), f(6), f(7)],
+                    pixels: s[5] as u32,
+                    mean_lab: [f(2), f(3), f(4)],
                 }
             })
             .collect();

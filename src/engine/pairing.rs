@@ -11,6 +11,7 @@
 //! between their ends.
 
 use super::Params;
+use super::geometry::norm;
 use super::walk::{Walk, WalkEnd};
 
 /// How an accepted cable's far end was found.
@@ -69,7 +70,7 @@ pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing>
                 far,
                 walk: i,
                 joined: None,
-                score: w.quality() * factor,
+                score: w.quality(params) * factor,
             }
         })
         .collect();
@@ -102,7 +103,10 @@ fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
     let lost: Vec<(usize, &Walk)> = walks
         .iter()
         .enumerate()
-        .filter(|(_, w)| w.end == WalkEnd::Lost && w.length_px >= params.min_cable_length_px * 0.5)
+        .filter(|(_, w)| {
+            w.end == WalkEnd::Lost
+                && w.length_px >= params.min_cable_length_px * params.join_min_length
+        })
         .collect();
     let mut out = Vec::new();
     for (n, &(i, a)) in lost.iter().enumerate() {
@@ -114,7 +118,7 @@ fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
                 b.end_point[0] - a.end_point[0],
                 b.end_point[1] - a.end_point[1],
             ];
-            let d = (gap[0] * gap[0] + gap[1] * gap[1]).sqrt();
+            let d = norm(gap);
             if d > params.join_radius_px {
                 continue;
             }
@@ -132,7 +136,10 @@ fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
                     far: FarEnd::Seed(b.seed),
                     walk: i,
                     joined: Some(j),
-                    score: (a.quality() * b.quality() * confidence[a.seed] * confidence[b.seed])
+                    score: (a.quality(params)
+                        * b.quality(params)
+                        * confidence[a.seed]
+                        * confidence[b.seed])
                         .sqrt()
                         * params.unconfirmed_factor,
                 });
@@ -226,7 +233,7 @@ mod tests {
         // weak detections is kept at full score.
         let got = pair(&walks, &[1.0, 0.05, 0.4, 0.4], &p);
         assert_eq!(got.len(), 2);
-        assert_eq!((got[0].start, got[0].score), (2, walks[2].quality()));
+        assert_eq!((got[0].start, got[0].score), (2, walks[2].quality(&p)));
         assert_eq!(got[1].start, 0);
     }
 }

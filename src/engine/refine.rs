@@ -10,7 +10,9 @@
 //! skipped; offsets are median- then mean-filtered along the curve so one bad profile
 //! cannot bend it.
 
+use super::Params;
 use super::color::LabImage;
+use super::geometry::{dist3, median, unit_or};
 
 /// Result of refining one centreline.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,18 +21,7 @@ pub struct Refined {
     pub points: Vec<[f32; 2]>,
     /// Median measured width, pixels, when enough profiles could be read.
     pub width_px: Option<f32>,
-    /// Fraction of profiles that could be read, 0..=1.
-    pub coverage: f32,
 }
-
-/// Distance between profile samples, pixels.
-const PROFILE_STEP: f32 = 0.5;
-/// A profile is read every this many input points.
-const PROFILE_STRIDE: usize = 2;
-/// A profile end closer than this (Lab ΔE) to the cable colour is not background.
-const MIN_BACKGROUND_DE: f32 = 10.0;
-/// Smallest plausible cable width, pixels.
-const MIN_WIDTH: f32 = 2.0;
 
 /// Bilinear Lab sample at (x, y); `None` outside the image.
 pub fn sample_lab(lab: &LabImage, x: f32, y: f32) -> Option<[f32; 3]> {
@@ -62,8 +53,7 @@ pub fn median_colour(lab: &LabImage, line: &[[f32; 2]]) -> Option<[f32; 3]> {
     let mut out = [0.0; 3];
     for (c, o) in out.iter_mut().enumerate() {
         let mut v: Vec<f32> = samples.iter().map(|s| s[c]).collect();
-        v.sort_by(f32::total_cmp);
-        *o = v[v.len() / 2];
+        *o = median(&mut v, f32::total_cmp)?;
     }
     Some(out)
 }
@@ -75,39 +65,46 @@ pub fn normals(line: &[[f32; 2]]) -> Vec<[f32; 2]> {
         .map(|i| {
             let a = line[i.saturating_sub(1)];
             let b = line[(i + 1).min(n - 1)];
-            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-            let len = (dx * dx + dy * dy).sqrt();
-            if len < 1e-6 {
-                [0.0, 0.0]
-            } else {
-                [-dy / len, dx / len]
-            }
+            let t = unit_or([b[0] - a[0], b[1] - a[1]], [0.0, 0.0]);
+            [-t[1], t[0]]
         })
         .collect()
 }
 
-/// Moves each point of `line` onto the cable centre found across it (see module docs);
-/// `radius` is the half-length of the profiles in pixels.
-pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
+/// What reading profiles needs from [`Params`].
+#[derive(Debug, Clone, Copy)]
+struct Profiles {
+    step: f32,
+    min_background_de: f32,
+    min_width: f32,
+}
+
+/// Moves each point of `line` onto the cable centre found across it (see module docs),
+/// reading profiles of half-length `refine_radius_px` every `refine_profile_stride`
+/// points; the moves are clamped to half that radius.
+pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     let Some(cable) = median_colour(lab, line) else {
         return Refined {
             points: line.to_vec(),
             width_px: None,
-            coverage: 0.0,
         };
     };
+    let radius = params.refine_radius_px;
+    let settings = Profiles {
+        step: params.refine_profile_step_px,
+        min_background_de: params.refine_min_background_de,
+        min_width: params.refine_min_width_px,
+    };
     let normal = normals(line);
-    let steps = (radius / PROFILE_STEP).round() as i32;
+    let steps = (radius / settings.step).round() as i32;
     let mut profile = Vec::with_capacity(2 * steps as usize + 1);
     let mut offsets: Vec<(usize, f32)> = Vec::new();
     let mut widths = Vec::new();
-    let mut read = 0usize;
-    for i in (0..line.len()).step_by(PROFILE_STRIDE) {
-        read += 1;
+    for i in (0..line.len()).step_by(params.refine_profile_stride.max(1) as usize) {
         let (p, nrm) = (line[i], normal[i]);
         profile.clear();
         for j in -steps..=steps {
-            let o = j as f32 * PROFILE_STEP;
+            let o = j as f32 * settings.step;
             match sample_lab(lab, p[0] + o * nrm[0], p[1] + o * nrm[1]) {
                 Some(s) => profile.push(s),
                 None => break,
@@ -116,25 +113,20 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
         if profile.len() != 2 * steps as usize + 1 {
             continue;
         }
-        if let Some((centre, width)) = read_profile(&profile, cable, steps as usize) {
+        if let Some((centre, width)) = read_profile(&profile, cable, steps as usize, settings) {
             offsets.push((i, centre));
             widths.push(width);
         }
     }
-    let coverage = if read == 0 {
-        0.0
+    let width_px = if widths.len() >= 3 {
+        median(&mut widths, f32::total_cmp)
     } else {
-        offsets.len() as f32 / read as f32
+        None
     };
-    let width_px = (widths.len() >= 3).then(|| {
-        widths.sort_by(f32::total_cmp);
-        widths[widths.len() / 2]
-    });
     if offsets.len() < 3 {
         return Refined {
             points: line.to_vec(),
             width_px,
-            coverage,
         };
     }
     let smooth = smooth_offsets(&offsets, line.len(), radius * 0.5);
@@ -144,11 +136,7 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
         .zip(&smooth)
         .map(|((p, n), &d)| [p[0] + d * n[0], p[1] + d * n[1]])
         .collect();
-    Refined {
-        points,
-        width_px,
-        coverage,
-    }
+    Refined { points, width_px }
 }
 
 /// Finds the cable across one profile; returns its centre offset and width in pixels,
@@ -159,21 +147,27 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, radius: f32) -> Refined {
 /// foreground exceeds half its peak (a full-width-at-half-maximum reading, so shading and
 /// highlights on the insulation do not bias the edges); the edges are interpolated to
 /// sub-pixel precision.
-fn read_profile(profile: &[[f32; 3]], cable: [f32; 3], centre: usize) -> Option<(f32, f32)> {
+fn read_profile(
+    profile: &[[f32; 3]],
+    cable: [f32; 3],
+    centre: usize,
+    settings: Profiles,
+) -> Option<(f32, f32)> {
     let (left_bg, right_bg) = (profile[0], profile[profile.len() - 1]);
-    if de(left_bg, cable) < MIN_BACKGROUND_DE || de(right_bg, cable) < MIN_BACKGROUND_DE {
+    let min_de = settings.min_background_de;
+    if dist3(left_bg, cable) < min_de || dist3(right_bg, cable) < min_de {
         return None;
     }
     let fg: Vec<f32> = profile
         .iter()
-        .map(|&s| de(s, left_bg).min(de(s, right_bg)))
+        .map(|&s| dist3(s, left_bg).min(dist3(s, right_bg)))
         .collect();
     let search = centre / 2;
     let peak = fg[centre - search..=centre + search]
         .iter()
         .copied()
         .fold(0.0f32, f32::max);
-    if peak < MIN_BACKGROUND_DE {
+    if peak < min_de {
         return None;
     }
     let half = 0.5 * peak;
@@ -195,11 +189,14 @@ fn read_profile(profile: &[[f32; 3]], cable: [f32; 3], centre: usize) -> Option<
     // Zero crossings between the last cable sample and the first background one.
     let left = lo as f32 - m[lo] / (m[lo] - m[lo - 1]);
     let right = hi as f32 + m[hi] / (m[hi] - m[hi + 1]);
-    let width = (right - left) * PROFILE_STEP;
-    if width < MIN_WIDTH {
+    let width = (right - left) * settings.step;
+    if width < settings.min_width {
         return None;
     }
-    Some((((left + right) * 0.5 - centre as f32) * PROFILE_STEP, width))
+    Some((
+        ((left + right) * 0.5 - centre as f32) * settings.step,
+        width,
+    ))
 }
 
 /// Offsets at every point: read ones median-filtered (5) and mean-filtered (5), the
@@ -209,8 +206,7 @@ fn smooth_offsets(read: &[(usize, f32)], n: usize, limit: f32) -> Vec<f32> {
     let med: Vec<f32> = (0..vals.len())
         .map(|i| {
             let mut w: Vec<f32> = vals[i.saturating_sub(2)..(i + 3).min(vals.len())].to_vec();
-            w.sort_by(f32::total_cmp);
-            w[w.len() / 2]
+            median(&mut w, f32::total_cmp).unwrap_or(0.0)
         })
         .collect();
     let mean: Vec<f32> = (0..med.len())
@@ -236,11 +232,6 @@ fn smooth_offsets(read: &[(usize, f32)], n: usize, limit: f32) -> Vec<f32> {
     out
 }
 
-#[inline]
-fn de(a: [f32; 3], b: [f32; 3]) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -261,13 +252,16 @@ mod tests {
     fn moves_an_offset_line_onto_the_band_and_measures_it() {
         let lab = band();
         let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, 18.0]).collect();
-        let r = refine(&line, &lab, 10.0);
+        let params = Params {
+            refine_radius_px: 10.0,
+            ..Params::default()
+        };
+        let r = refine(&line, &lab, &params);
         for p in &r.points {
             assert!((p[1] - 20.5).abs() < 0.3, "{p:?}");
         }
         let w = r.width_px.unwrap();
         assert!((w - 8.0).abs() < 1.0, "width {w}");
-        assert!(r.coverage > 0.9);
     }
 
     #[test]

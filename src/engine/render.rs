@@ -21,20 +21,6 @@ pub enum MaskKind {
     Color,
 }
 
-impl std::str::FromStr for MaskKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "binary" => Ok(Self::Binary),
-            "labels" => Ok(Self::Labels),
-            "color" => Ok(Self::Color),
-            other => Err(format!(
-                "unknown mask kind `{other}` (expected binary, labels or color)"
-            )),
-        }
-    }
-}
-
 /// A rendered mask: single-channel for binary and labels, RGB for colour.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Mask {
@@ -270,12 +256,5 @@ mod tests {
         stroke(&[[-10.0, -10.0], [50.0, 30.0]], 9.0, 40, 20, |x, y| {
             assert!(x < 40 && y < 20)
         });
-    }
-
-    #[test]
-    fn mask_kinds_parse() {
-        assert_eq!("labels".parse::<MaskKind>().unwrap(), MaskKind::Labels);
-        assert!("rainbow".parse::<MaskKind>().is_err());
-        assert_ne!(palette(0), palette(1));
     }
 }

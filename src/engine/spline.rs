@@ -6,6 +6,14 @@
 //! (a P-spline in the sense of Eilers and Marx). λ is `smoothing` scaled by the data
 //! density, so its meaning does not change with the number of points.
 
+use super::geometry::dist;
+
+/// Degree of the fitted splines (cubic, as the paper's splprep).
+const DEGREE: usize = 3;
+/// Penalty per unit of `smoothing` and of mean weight per control point: fixes what
+/// `smoothing = 1` means, not a tuning knob (that is `smoothing`).
+const PENALTY_SCALE: f64 = 0.1;
+
 /// A clamped B-spline curve in the plane, parameter domain [0, 1].
 #[derive(Debug, Clone, PartialEq)]
 pub struct BSpline {
@@ -28,7 +36,6 @@ impl BSpline {
         knot_spacing: f32,
         smoothing: f32,
     ) -> Option<Self> {
-        const DEGREE: usize = 3;
         let mut u = Vec::with_capacity(points.len());
         let mut acc = 0.0f64;
         u.push(0.0);
@@ -67,7 +74,7 @@ impl BSpline {
             }
         }
         // Penalty scaled by mean weight per control point, so `smoothing` is unit-free.
-        let lambda = smoothing as f64 * weight_sum / n as f64 * 0.1 + 1e-9;
+        let lambda = smoothing as f64 * weight_sum / n as f64 * PENALTY_SCALE + 1e-9;
         for j in 0..n.saturating_sub(2) {
             let coeffs = [1.0, -2.0, 1.0];
             for (r, cr) in coeffs.iter().enumerate() {
@@ -128,7 +135,7 @@ pub fn resample(line: &[[f32; 2]], step: f32) -> Vec<[f32; 2]> {
     let mut out = vec![first];
     let mut carried = 0.0f32;
     for w in line.windows(2) {
-        let seg = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt();
+        let seg = dist(w[0], w[1]);
         let mut at = step - carried;
         while at <= seg {
             let t = at / seg;
@@ -142,22 +149,13 @@ pub fn resample(line: &[[f32; 2]], step: f32) -> Vec<[f32; 2]> {
     }
     let last = line[line.len() - 1];
     if out.last() != Some(&last) && line.len() > 1 {
-        let tail = out.last().map_or(f32::MAX, |p| {
-            ((p[0] - last[0]).powi(2) + (p[1] - last[1]).powi(2)).sqrt()
-        });
+        let tail = out.last().map_or(f32::MAX, |&p| dist(p, last));
         if tail < step * 0.5 && out.len() > 1 {
             out.pop();
         }
         out.push(last);
     }
     out
-}
-
-/// Length of a polyline, pixels.
-pub fn polyline_length(line: &[[f32; 2]]) -> f32 {
-    line.windows(2)
-        .map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt())
-        .sum()
 }
 
 /// Index of the knot span containing `u` (The NURBS Book, A2.1).
@@ -242,6 +240,7 @@ fn solve_spd(a: &mut [f64], b: &[[f64; 2]], n: usize) -> Option<Vec<[f64; 2]>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::geometry::polyline_length;
     use proptest::prelude::*;
 
     #[test]

@@ -8,6 +8,7 @@
 //! their own.
 
 use super::color::LabImage;
+use super::connectivity::enforce_connectivity;
 
 /// A label image: one superpixel id per pixel, ids dense in `0..count`.
 #[derive(Debug, Clone, PartialEq)]
@@ -201,77 +202,12 @@ fn accumulate(lab: &LabImage, labels: &[u32], sums: &mut [[f64; 6]]) {
     }
 }
 
-/// Relabels so that every label is one 4-connected region. A fragment of fewer than
-/// `min_size` pixels takes the label of the region it touches before it in raster
-/// order (so the merged region stays connected); any other fragment gets a fresh label.
-/// Returns the new labels and their count.
-pub fn enforce_connectivity(
-    labels: &[u32],
-    w: usize,
-    h: usize,
-    min_size: usize,
-) -> (Vec<u32>, usize) {
-    const UNSET: u32 = u32::MAX;
-    let mut out = vec![UNSET; labels.len()];
-    let mut component: Vec<usize> = Vec::new();
-    let mut next = 0u32;
-    for start in 0..labels.len() {
-        if out[start] != UNSET {
-            continue;
-        }
-        let original = labels[start];
-        // A neighbour that already has a final label: the merge target for a small fragment.
-        let (sx, sy) = (start % w, start / w);
-        let adjacent = if sx > 0 && out[start - 1] != UNSET {
-            Some(out[start - 1])
-        } else if sy > 0 {
-            Some(out[start - w])
-        } else {
-            None
-        };
-        component.clear();
-        component.push(start);
-        out[start] = next;
-        let mut head = 0;
-        while head < component.len() {
-            let p = component[head];
-            head += 1;
-            let (x, y) = (p % w, p / w);
-            let mut visit = |q: usize| {
-                if out[q] == UNSET && labels[q] == original {
-                    out[q] = next;
-                    component.push(q);
-                }
-            };
-            if x > 0 {
-                visit(p - 1);
-            }
-            if x + 1 < w {
-                visit(p + 1);
-            }
-            if y > 0 {
-                visit(p - w);
-            }
-            if y + 1 < h {
-                visit(p + w);
-            }
-        }
-        match adjacent {
-            Some(target) if component.len() < min_size => {
-                for &p in &component {
-                    out[p] = target;
-                }
-            }
-            _ => next += 1,
-        }
-    }
-    (out, next as usize)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    use crate::engine::connectivity::enforce_connectivity;
 
     /// Every label is one 4-connected region and ids are dense.
     pub(crate) fn assert_connected_dense(sp: &Superpixels) {
@@ -321,22 +257,76 @@ mod tests {
         }
     }
 
-    #[test]
-    fn connectivity_splits_and_merges() {
-        // Label 0 in two far-apart blocks, label 1 in two pieces (the right one of
-        // two pixels), and a one-pixel island of label 2.
-        #[rustfmt::skip]
-        let labels = vec![
-            0, 0, 1, 1, 0, 0,
-            0, 0, 1, 1, 0, 0,
-            1, 1, 1, 2, 1, 1,
-        ];
-        let (out, count) = enforce_connectivity(&labels, 6, 3, 2);
-        assert_eq!(count, 4);
-        assert_eq!(out[0], out[1]);
-        assert_ne!(out[0], out[4]);
-        assert_ne!(out[12], out[16]);
-        assert_eq!(out[15], out[14], "the island merged into its neighbour");
+    /// A random Lab image (the planes hold arbitrary values; SLIC does not care).
+    fn random_lab(w: usize, h: usize, seed: u64) -> LabImage {
+        let mut state = seed | 1;
+        let rgb: Vec<u8> = (0..w * h * 3)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 56) as u8
+            })
+            .collect();
+        LabImage::from_rgb(&rgb, w, h)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// The vectorised row assignment equals a plain per-pixel comparison.
+        #[test]
+        fn assign_row_matches_a_naive_loop(
+            len in 1usize..40, seed in any::<u64>(), k in 0u32..1000,
+            cx in -5.0f32..45.0, dy2 in 0.0f32..500.0, spatial in 0.0f32..5.0
+        ) {
+            let lab = random_lab(len, 1, seed);
+            let c = Centre { l: lab.l[len / 2] + 3.0, a: lab.a[0], b: lab.b[len - 1], x: cx, y: 0.0 };
+            let dx2: Vec<f32> = (0..len).map(|x| (x as f32 - cx).powi(2) * spatial).collect();
+            // Existing bests: some beaten, some not.
+            let mut dist: Vec<f32> = (0..len).map(|i| (i as f32 * 37.0) % 400.0).collect();
+            let mut labels: Vec<u32> = (0..len as u32).collect();
+            let (mut naive_dist, mut naive_labels) = (dist.clone(), labels.clone());
+            for i in 0..len {
+                let d = (lab.l[i] - c.l).powi(2) + (lab.a[i] - c.a).powi(2)
+                    + (lab.b[i] - c.b).powi(2) + dx2[i] + dy2;
+                if d < naive_dist[i] {
+                    naive_dist[i] = d;
+                    naive_labels[i] = k;
+                }
+            }
+            let row = RowPlanes { l: &lab.l, a: &lab.a, b: &lab.b, dx2: &dx2 };
+            assign_row(row, &c, dy2, k, &mut dist, &mut labels);
+            prop_assert_eq!(labels, naive_labels);
+            for (got, want) in dist.iter().zip(&naive_dist) {
+                prop_assert!((got - want).abs() <= 1e-3 * want.abs().max(1.0));
+            }
+        }
+
+        /// Run-based centre sums equal per-pixel sums.
+        #[test]
+        fn accumulate_matches_per_pixel_sums(
+            w in 1usize..30, h in 1usize..20, seed in any::<u64>(), n in 1u32..6
+        ) {
+            let lab = random_lab(w, h, seed);
+            let labels: Vec<u32> = (0..w * h).map(|i| ((i / 3 + i / w) as u32) % n).collect();
+            let mut sums = vec![[0.0f64; 6]; n as usize];
+            accumulate(&lab, &labels, &mut sums);
+            let mut naive = vec![[0.0f64; 6]; n as usize];
+            for (i, &k) in labels.iter().enumerate() {
+                let s = &mut naive[k as usize];
+                s[0] += lab.l[i] as f64;
+                s[1] += lab.a[i] as f64;
+                s[2] += lab.b[i] as f64;
+                s[3] += (i % w) as f64;
+                s[4] += (i / w) as f64;
+                s[5] += 1.0;
+            }
+            for (got, want) in sums.iter().zip(&naive) {
+                for c in 0..6 {
+                    prop_assert!((got[c] - want[c]).abs() <= 1e-3 * want[c].abs().max(1.0), "{got:?} vs {want:?}");
+                }
+            }
+        }
     }
 
     proptest! {
@@ -345,12 +335,7 @@ mod tests {
         fn every_pixel_labelled_and_labels_connected(
             w in 8usize..48, h in 8usize..48, seed in any::<u64>(), n in 4u32..80, m in 1.0f32..40.0
         ) {
-            let mut state = seed | 1;
-            let rgb: Vec<u8> = (0..w * h * 3).map(|_| {
-                state ^= state << 13; state ^= state >> 7; state ^= state << 17;
-                (state >> 56) as u8
-            }).collect();
-            let lab = LabImage::from_rgb(&rgb, w, h);
+            let lab = random_lab(w, h, seed);
             let sp = slic(&lab, &SlicSettings { n_segments: n, compactness: m, iterations: 5, min_size_factor: 0.25 });
             prop_assert_eq!(sp.labels.len(), w * h);
             assert_connected_dense(&sp);

@@ -3,7 +3,7 @@
 //! From every end ("seed") a walk starts towards each ring-1 neighbour of the seed's
 //! superpixel; the first step fixes the initial heading. Each iteration scores every
 //! vertex of the order-d neighbourhood of the head that lies ahead,
-//! p = p_V · p_C · p_D, and appends the argmax:
+//! p = p_V · p_C · p_D · c, and appends the argmax:
 //!
 //! - p_V = 1 / (1 + c_V (1 − I)), the Bradford density at 1 − I normalised to 1 at
 //!   I = 1, where I is the histogram intersection between the candidate and the walk's
@@ -11,7 +11,15 @@
 //! - p_C = exp(κ (cos φ − 1)), a von Mises density in the turn φ between the walk's
 //!   heading (measured over `heading_span_px`, which smooths centroid jitter) and the
 //!   step, normalised to 1 at φ = 0; turns above `max_turn_deg` are refused;
-//! - p_D = 1 / (1 + c_D d / D_max), the Bradford density in the step length.
+//! - p_D = 1 / (1 + c_D d / D_max), the Bradford density in the step length;
+//! - c, the candidate's lateral contrast in 0..=1: the smaller of its Lab distances to
+//!   the image one superpixel step to either side of the step's direction, divided by
+//!   `contrast_saturation` and capped at 1 (a cable differs from the background on both
+//!   sides; a vertex of the background beside a cable on one side only). Not in the
+//!   paper: it keeps walks off plain background.
+//!
+//! The argmax is refused (the walk stops) when its colour similarity is below
+//! `min_similarity` or its contrast below `min_contrast`.
 //!
 //! A walk ends on reaching another seed (within r), on leaving the frame, when the best
 //! candidate's colour no longer matches the model (it left the cable) or at the
@@ -21,6 +29,7 @@
 
 use super::Params;
 use super::color::LabImage;
+use super::geometry::{dist, dist3, heading, norm};
 use super::graph::{Graph, Neighbourhood, intersection};
 
 /// An end given to the walker: its point and the superpixel that contains it.
@@ -67,14 +76,15 @@ pub struct Walk {
 }
 
 impl Walk {
-    /// Overall quality in 0..=1: colour agreement × smoothness × lateral contrast.
-    pub fn quality(&self) -> f32 {
-        self.visual.sqrt() * self.smoothness * self.contrast * self.contrast
+    /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b, with
+    /// a = `quality_visual_exponent` (0.5 by default) and b =
+    /// `quality_contrast_exponent` (2).
+    pub fn quality(&self, params: &Params) -> f32 {
+        self.visual.powf(params.quality_visual_exponent)
+            * self.smoothness
+            * self.contrast.powf(params.quality_contrast_exponent)
     }
 }
-
-/// Lab distance at which lateral contrast saturates at 1 (a clearly visible edge).
-const CONTRAST_SATURATION: f32 = 25.0;
 
 /// Runs all walks from all seeds. `lab` is used to measure lateral contrast.
 pub fn walk_all(
@@ -241,7 +251,7 @@ impl<'a> Walker<'a> {
             }
             let q = self.pos(c);
             let step = [q[0] - here[0], q[1] - here[1]];
-            let d = (step[0] * step[0] + step[1] * step[1]).sqrt();
+            let d = norm(step);
             if d < 1e-3 || d > p.max_step_px {
                 continue;
             }
@@ -298,7 +308,7 @@ impl<'a> Walker<'a> {
     /// border, or lost.
     fn stopped(&self, s: usize, here: [f32; 2], dir: [f32; 2]) -> WalkEnd {
         let p = self.params;
-        let reach = 2.0 * p.close_radius_px;
+        let reach = p.stopped_seed_reach * p.close_radius_px;
         let ahead = self
             .seeds
             .iter()
@@ -306,14 +316,14 @@ impl<'a> Walker<'a> {
             .filter(|&(t, _)| t != s)
             .filter_map(|(t, seed)| {
                 let v = [seed.point[0] - here[0], seed.point[1] - here[1]];
-                let d = (v[0] * v[0] + v[1] * v[1]).sqrt();
+                let d = norm(v);
                 let cos = (v[0] * dir[0] + v[1] * dir[1]) / d.max(1e-6);
                 (d <= reach && cos >= self.cos_max_turn).then_some((t, d))
             })
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((t, _)) = ahead {
             WalkEnd::Seed(t)
-        } else if self.near_border_heading_out(here, dir, 2.0) {
+        } else if self.near_border_heading_out(here, dir, p.stopped_border_reach) {
             WalkEnd::Border
         } else {
             WalkEnd::Lost
@@ -325,11 +335,11 @@ impl<'a> Walker<'a> {
     fn near_border_heading_out(&self, here: [f32; 2], dir: [f32; 2], factor: f32) -> bool {
         let m = self.params.border_margin_px * factor;
         let (w, h) = (self.lab.width as f32, self.lab.height as f32);
-        const OUTWARD: f32 = 0.3;
-        (here[0] < m && dir[0] < -OUTWARD)
-            || (here[0] > w - 1.0 - m && dir[0] > OUTWARD)
-            || (here[1] < m && dir[1] < -OUTWARD)
-            || (here[1] > h - 1.0 - m && dir[1] > OUTWARD)
+        let out = self.params.border_outward_cos;
+        (here[0] < m && dir[0] < -out)
+            || (here[0] > w - 1.0 - m && dir[0] > out)
+            || (here[1] < m && dir[1] < -out)
+            || (here[1] > h - 1.0 - m && dir[1] > out)
     }
 
     /// How much vertex `v` differs in colour from the image one step to either side of
@@ -351,58 +361,9 @@ impl<'a> Walker<'a> {
             least = least.min(dist3(sample, vert.mean_lab));
         }
         if least.is_finite() {
-            (least / CONTRAST_SATURATION).min(1.0)
+            (least / self.params.contrast_saturation).min(1.0)
         } else {
             0.0
         }
-    }
-}
-
-/// Unit heading of a walk: from the last point at least `span` pixels back (or the
-/// first point) to the newest point.
-pub(crate) fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {
-    let Some(&head) = points.last() else {
-        return [1.0, 0.0];
-    };
-    let mut from = points[0];
-    let mut acc = 0.0;
-    for w in points.windows(2).rev() {
-        acc += dist(w[0], w[1]);
-        from = w[0];
-        if acc >= span {
-            break;
-        }
-    }
-    let v = [head[0] - from[0], head[1] - from[1]];
-    let n = (v[0] * v[0] + v[1] * v[1]).sqrt();
-    if n < 1e-6 {
-        [1.0, 0.0]
-    } else {
-        [v[0] / n, v[1] / n]
-    }
-}
-
-#[inline]
-pub(crate) fn dist(a: [f32; 2], b: [f32; 2]) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
-}
-
-#[inline]
-fn dist3(a: [f32; 3], b: [f32; 3]) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn heading_uses_the_span() {
-        let pts = [[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [20.0, 5.0]];
-        let h = heading(&pts, 5.0);
-        assert!((h[0] - 0.0).abs() < 1e-6 && (h[1] - 1.0).abs() < 1e-6);
-        let h = heading(&pts, 12.0);
-        assert!((h[0] - 0.894).abs() < 1e-3 && (h[1] - 0.447).abs() < 1e-3);
-        assert_eq!(heading(&[], 3.0), [1.0, 0.0]);
     }
 }

@@ -7,13 +7,13 @@ mod metrics;
 pub use dataset::{DatasetError, Sample, default_dataset_dir, load_dataset, terminal_ends};
 pub use metrics::{SetSummary, iou, match_cables, match_points, summarise};
 
-use std::time::Instant;
-
 use image::GrayImage;
 use serde::Serialize;
 
-use crate::detect::{EndpointDetector, Ends};
-use crate::engine::{self, Params, render};
+use crate::detect::EndpointDetector;
+use crate::engine::{Mask, MaskKind, Params, render};
+use crate::pipeline::{self, EndsSource};
+use crate::timings::Timings;
 
 /// Distance within which a detected end matches a true terminal (the 15 px).
 pub const TERMINAL_MATCH_PX: f64 = 15.0;
@@ -41,29 +41,9 @@ pub struct ImageResult {
     pub terminals: usize,
     /// Ends within [`TERMINAL_MATCH_PX`] of a true terminal, one-to-one.
     pub terminals_matched: usize,
-    /// Milliseconds per stage: decode, superpixels, graph, walks, splines, mask, total.
-    pub timings_ms: StageMs,
-}
-
-/// Per-stage milliseconds of one evaluated image.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct StageMs {
-    /// JPEG decoding.
-    pub decode: f64,
-    /// Endpoint detection (0 with the true ends).
-    pub endpoints: f64,
-    /// Colour conversion, blur, SLIC.
-    pub superpixels: f64,
-    /// Region adjacency graph.
-    pub graph: f64,
-    /// Walks and pairing.
-    pub walks: f64,
-    /// Spline fits and refinement.
-    pub splines: f64,
-    /// Mask drawing.
-    pub mask: f64,
-    /// All of the above.
-    pub total: f64,
+    /// Milliseconds per stage (no encoding: the mask is scored directly; `total` is
+    /// the pipeline's time).
+    pub timings_ms: Timings,
 }
 
 /// Per-cable IoU at or above which a found cable counts as matching a true one.
@@ -76,28 +56,27 @@ pub fn evaluate_sample(
     params: &Params,
     detector: Option<&dyn EndpointDetector>,
 ) -> Result<ImageResult, DatasetError> {
-    let t0 = Instant::now();
     let bytes = std::fs::read(&sample.image).map_err(|e| DatasetError::io(&sample.image, e))?;
-    let image = crate::decode::decode_rgb(&bytes, u64::MAX)
+    let (w, h) = crate::decode::dimensions(&bytes)
         .map_err(|e| DatasetError::Image(sample.image.clone(), e.to_string()))?;
-    let decode = ms(t0);
-    let (w, h) = image.dimensions();
     let terminals = terminal_ends(&sample.cables, w, h);
-    let ends = match detector {
-        Some(d) => Ends::detected(d, &image)
-            .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?,
-        None => Ends::given(terminals.clone()),
+    let out = pipeline::run(&pipeline::Job {
+        bytes: &bytes,
+        ends: match detector {
+            Some(d) => EndsSource::Detect(d),
+            None => EndsSource::Given(&terminals),
+        },
+        params,
+        max_pixels: u64::MAX,
+        mask: MaskKind::Binary,
+        overlay: false,
+        encode: false,
+    })
+    .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
+    let Mask::Gray(pred) = &out.mask else {
+        unreachable!("binary masks are single-channel")
     };
-    let endpoints = ends.detect_ms;
-    let seg = engine::segment_with_confidence(&image, &ends.points, &ends.confidences, params)
-        .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
-    let t = Instant::now();
-    let pred = match render::render_mask(&seg, engine::MaskKind::Binary, params.mask_width_px) {
-        engine::Mask::Gray(m) => m,
-        engine::Mask::Rgb(_) => unreachable!("binary masks are single-channel"),
-    };
-    let mask = ms(t);
-    let total = ms(t0);
+    let seg = &out.segmentation;
     let gt_all = sample.mask_all()?;
     let gt_each = sample.cable_masks()?;
     let found: Vec<GrayImage> = seg
@@ -113,20 +92,11 @@ pub fn evaluate_sample(
         found_cables: seg.cables.len(),
         matched_cables,
         matched_iou_sum,
-        iou: iou(&pred, &gt_all),
-        ends: ends.points.len(),
+        iou: iou(pred, &gt_all),
+        ends: out.ends.points.len(),
         terminals: terminals.len(),
-        terminals_matched: match_points(&ends.points, &terminals, TERMINAL_MATCH_PX),
-        timings_ms: StageMs {
-            decode,
-            endpoints,
-            superpixels: seg.timings.superpixels,
-            graph: seg.timings.graph,
-            walks: seg.timings.walks,
-            splines: seg.timings.splines,
-            mask,
-            total,
-        },
+        terminals_matched: match_points(&out.ends.points, &terminals, TERMINAL_MATCH_PX),
+        timings_ms: out.timings,
     })
 }
 
@@ -156,10 +126,6 @@ pub fn weighted_iou(results: &[ImageResult], set: &str) -> f64 {
         .iter()
         .find(|s| s.set == set)
         .map_or(0.0, |s| s.weighted_iou)
-}
-
-fn ms(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 #[cfg(test)]

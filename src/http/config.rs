@@ -1,16 +1,16 @@
-//! Service configuration: every setting is a flag with an environment twin.
+//! Service configuration, as plain values: the command line (`crate::cli`) fills it
+//! from flags and environment variables, tests build it directly.
 
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
 
-use clap::ValueEnum;
-
-use crate::detect::DetectorArgs;
+use crate::detect::DetectorConfig;
 use crate::engine::{EngineError, PRESET_NAMES, Params};
 
 /// Log line format.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LogFormat {
     /// Human-readable text.
     Text,
@@ -18,50 +18,67 @@ pub enum LogFormat {
     Json,
 }
 
-/// Settings of `ariadne serve`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct ServeArgs {
-    /// Address to listen on.
-    #[arg(long, env = "ARIADNE_BIND", default_value = "0.0.0.0:8080")]
-    pub bind: SocketAddr,
-    /// Worker threads for CPU work [default: the CPUs available to the process].
-    #[arg(long, env = "ARIADNE_WORKERS")]
-    pub workers: Option<usize>,
-    /// Requests that may wait for a worker; more are answered 429 at once.
-    #[arg(long, env = "ARIADNE_QUEUE", default_value_t = 16)]
-    pub queue: usize,
-    /// Per-request deadline in milliseconds, queueing included; later answers are 504.
-    #[arg(long, env = "ARIADNE_DEADLINE_MS", default_value_t = 10_000)]
-    pub deadline_ms: u64,
-    /// Largest accepted request body, bytes.
-    #[arg(long, env = "ARIADNE_MAX_BODY_BYTES", default_value_t = 16 * 1024 * 1024)]
-    pub max_body_bytes: usize,
-    /// Largest accepted image, pixels (width × height, read from the header).
-    #[arg(long, env = "ARIADNE_MAX_PIXELS", default_value_t = 16_000_000)]
-    pub max_pixels: u64,
-    /// Seconds `Retry-After` asks rejected clients to wait.
-    #[arg(long, env = "ARIADNE_RETRY_AFTER_S", default_value_t = 1)]
-    pub retry_after_s: u64,
-    /// JSON file of extra or overriding presets: {"name": {"n_segments": 1500, ...}, ...}.
-    #[arg(long, env = "ARIADNE_PRESETS")]
-    pub presets: Option<PathBuf>,
-    /// Log format.
-    #[arg(long, env = "ARIADNE_LOG_FORMAT", value_enum, default_value = "text")]
-    pub log_format: LogFormat,
-    /// Seconds between a shutdown signal and closing the listener, during which
-    /// /readyz answers 503 so that load balancers stop sending work.
-    #[arg(long, env = "ARIADNE_SHUTDOWN_DELAY_S", default_value_t = 0)]
-    pub shutdown_delay_s: u64,
-    /// Seconds in-flight requests get to finish after the listener closes.
-    #[arg(long, env = "ARIADNE_SHUTDOWN_GRACE_S", default_value_t = 30)]
-    pub shutdown_grace_s: u64,
-    /// The endpoint detector, run when a request gives no ends.
-    #[command(flatten)]
-    pub detector: DetectorArgs,
+impl FromStr for LogFormat {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        crate::choice::parse(
+            s,
+            &[("text", Self::Text), ("json", Self::Json)],
+            "log format",
+        )
+    }
 }
 
-impl ServeArgs {
-    /// Worker count: the flag, or the CPUs this process may use (container limits
+/// Settings of the service (`ariadne serve`); see `--help` for each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServeConfig {
+    /// Address to listen on.
+    pub bind: SocketAddr,
+    /// Worker threads for CPU work; `None`: the CPUs available to the process.
+    pub workers: Option<usize>,
+    /// Requests that may wait for a worker; more are answered 429 at once.
+    pub queue: usize,
+    /// Per-request deadline in milliseconds, queueing included; later answers are 504.
+    pub deadline_ms: u64,
+    /// Largest accepted request body, bytes.
+    pub max_body_bytes: usize,
+    /// Largest accepted image, pixels (width × height, read from the header).
+    pub max_pixels: u64,
+    /// Seconds `Retry-After` asks rejected clients to wait.
+    pub retry_after_s: u64,
+    /// JSON file of extra or overriding presets.
+    pub presets: Option<PathBuf>,
+    /// Log format.
+    pub log_format: LogFormat,
+    /// Seconds between a shutdown signal and closing the listener (not ready meanwhile).
+    pub shutdown_delay_s: u64,
+    /// Seconds in-flight requests get to finish after the listener closes.
+    pub shutdown_grace_s: u64,
+    /// The endpoint detector, run when a request gives no ends.
+    pub detector: DetectorConfig,
+}
+
+impl Default for ServeConfig {
+    fn default() -> Self {
+        Self {
+            bind: SocketAddr::from(([0, 0, 0, 0], 8080)),
+            workers: None,
+            queue: 16,
+            deadline_ms: 10_000,
+            max_body_bytes: 16 * 1024 * 1024,
+            max_pixels: 16_000_000,
+            retry_after_s: 1,
+            presets: None,
+            log_format: LogFormat::Text,
+            shutdown_delay_s: 0,
+            shutdown_grace_s: 30,
+            detector: DetectorConfig::default(),
+        }
+    }
+}
+
+impl ServeConfig {
+    /// Worker count: the setting, or the CPUs this process may use (container limits
     /// included, as the standard library reads cgroup quotas).
     pub fn worker_count(&self) -> usize {
         self.workers

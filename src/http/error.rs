@@ -9,6 +9,82 @@ use utoipa::ToSchema;
 use crate::decode::DecodeError;
 use crate::detect::DetectError;
 use crate::engine::EngineError;
+use crate::pipeline::PipelineError;
+
+/// The stable, machine-readable code of every error the API answers with (the
+/// `error.code` of the body).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize, ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorCode {
+    /// 400: the form has no `image` part.
+    MissingImage,
+    /// 400: the image part or body is empty.
+    EmptyImage,
+    /// 400: the multipart body is malformed or has an unknown part.
+    BadMultipart,
+    /// 400: the raw body could not be read.
+    BadBody,
+    /// 400: `endpoints` is not a JSON array of `[x, y]` pairs, or given twice.
+    BadEndpoints,
+    /// 400: `options` is not a JSON object of known parameters.
+    BadOptions,
+    /// 400: a query parameter is malformed.
+    BadQuery,
+    /// 400: no preset of that name.
+    UnknownPreset,
+    /// 413: the body is over the limit.
+    BodyTooLarge,
+    /// 413: the image has more pixels than allowed.
+    TooManyPixels,
+    /// 415: neither JPEG, PNG nor multipart.
+    UnsupportedMediaType,
+    /// 422: the image cannot be decoded.
+    UndecodableImage,
+    /// 422: an end lies outside the image or is not finite.
+    EndpointOutsideImage,
+    /// 422: an option is out of its range.
+    OptionOutOfRange,
+    /// 422: the image is too small to segment.
+    ImageTooSmall,
+    /// 429: the queue is full.
+    QueueFull,
+    /// 504: the deadline passed.
+    DeadlineExceeded,
+    /// 404: no such route.
+    NotFound,
+    /// 405: the route does not take this method.
+    MethodNotAllowed,
+    /// 500: a bug.
+    Internal,
+}
+
+impl ErrorCode {
+    /// The code as it appears in the body.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::MissingImage => "missing_image",
+            Self::EmptyImage => "empty_image",
+            Self::BadMultipart => "bad_multipart",
+            Self::BadBody => "bad_body",
+            Self::BadEndpoints => "bad_endpoints",
+            Self::BadOptions => "bad_options",
+            Self::BadQuery => "bad_query",
+            Self::UnknownPreset => "unknown_preset",
+            Self::BodyTooLarge => "body_too_large",
+            Self::TooManyPixels => "too_many_pixels",
+            Self::UnsupportedMediaType => "unsupported_media_type",
+            Self::UndecodableImage => "undecodable_image",
+            Self::EndpointOutsideImage => "endpoint_outside_image",
+            Self::OptionOutOfRange => "option_out_of_range",
+            Self::ImageTooSmall => "image_too_small",
+            Self::QueueFull => "queue_full",
+            Self::DeadlineExceeded => "deadline_exceeded",
+            Self::NotFound => "not_found",
+            Self::MethodNotAllowed => "method_not_allowed",
+            Self::Internal => "internal",
+        }
+    }
+}
 
 /// Everything a request can fail with; each variant maps to exactly one status.
 #[derive(Debug, thiserror::Error)]
@@ -17,7 +93,7 @@ pub enum ApiError {
     #[error("{message}")]
     BadRequest {
         /// Machine-readable code.
-        code: &'static str,
+        code: ErrorCode,
         /// What is wrong and how to fix it.
         message: String,
     },
@@ -25,7 +101,7 @@ pub enum ApiError {
     #[error("{message}")]
     TooLarge {
         /// Machine-readable code.
-        code: &'static str,
+        code: ErrorCode,
         /// The limit and the offending size.
         message: String,
     },
@@ -36,7 +112,7 @@ pub enum ApiError {
     #[error("{message}")]
     Unprocessable {
         /// Machine-readable code.
-        code: &'static str,
+        code: ErrorCode,
         /// What is wrong.
         message: String,
     },
@@ -49,8 +125,11 @@ pub enum ApiError {
         retry_after_s: u64,
     },
     /// The request took longer than its deadline.
-    #[error("the request exceeded its deadline of {0} ms")]
-    DeadlineExceeded(u64),
+    #[error("the request exceeded its deadline of {deadline_ms} ms")]
+    DeadlineExceeded {
+        /// The configured deadline.
+        deadline_ms: u64,
+    },
     /// No such route.
     #[error("no route for {0}")]
     NotFound(String),
@@ -73,14 +152,14 @@ pub struct ErrorBody {
 #[derive(Debug, Serialize, serde::Deserialize, ToSchema)]
 pub struct ErrorDetail {
     /// Stable machine-readable code, e.g. `queue_full`.
-    pub code: String,
+    pub code: ErrorCode,
     /// What went wrong, for a person.
     pub message: String,
 }
 
 impl ApiError {
     /// A 400 with this code and message.
-    pub fn bad_request(code: &'static str, message: impl Into<String>) -> Self {
+    pub fn bad_request(code: ErrorCode, message: impl Into<String>) -> Self {
         Self::BadRequest {
             code,
             message: message.into(),
@@ -95,7 +174,7 @@ impl ApiError {
             Self::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             Self::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             Self::QueueFull { .. } => StatusCode::TOO_MANY_REQUESTS,
-            Self::DeadlineExceeded(_) => StatusCode::GATEWAY_TIMEOUT,
+            Self::DeadlineExceeded { .. } => StatusCode::GATEWAY_TIMEOUT,
             Self::NotFound(_) => StatusCode::NOT_FOUND,
             Self::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
             Self::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
@@ -103,17 +182,17 @@ impl ApiError {
     }
 
     /// The stable code of this error.
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> ErrorCode {
         match self {
             Self::BadRequest { code, .. }
             | Self::TooLarge { code, .. }
-            | Self::Unprocessable { code, .. } => code,
-            Self::UnsupportedMediaType(_) => "unsupported_media_type",
-            Self::QueueFull { .. } => "queue_full",
-            Self::DeadlineExceeded(_) => "deadline_exceeded",
-            Self::NotFound(_) => "not_found",
-            Self::MethodNotAllowed(_) => "method_not_allowed",
-            Self::Internal(_) => "internal",
+            | Self::Unprocessable { code, .. } => *code,
+            Self::UnsupportedMediaType(_) => ErrorCode::UnsupportedMediaType,
+            Self::QueueFull { .. } => ErrorCode::QueueFull,
+            Self::DeadlineExceeded { .. } => ErrorCode::DeadlineExceeded,
+            Self::NotFound(_) => ErrorCode::NotFound,
+            Self::MethodNotAllowed(_) => ErrorCode::MethodNotAllowed,
+            Self::Internal(_) => ErrorCode::Internal,
         }
     }
 }
@@ -121,14 +200,14 @@ impl ApiError {
 impl From<DecodeError> for ApiError {
     fn from(e: DecodeError) -> Self {
         match e {
-            DecodeError::Empty => Self::bad_request("empty_image", e.to_string()),
+            DecodeError::Empty => Self::bad_request(ErrorCode::EmptyImage, e.to_string()),
             DecodeError::Unsupported(_) => Self::UnsupportedMediaType(e.to_string()),
             DecodeError::TooManyPixels { .. } => Self::TooLarge {
-                code: "too_many_pixels",
+                code: ErrorCode::TooManyPixels,
                 message: e.to_string(),
             },
             DecodeError::Corrupt(_) | DecodeError::Unrecognised => Self::Unprocessable {
-                code: "undecodable_image",
+                code: ErrorCode::UndecodableImage,
                 message: e.to_string(),
             },
         }
@@ -144,20 +223,33 @@ impl From<DetectError> for ApiError {
 impl From<EngineError> for ApiError {
     fn from(e: EngineError) -> Self {
         let code = match e {
-            EngineError::BadOptions(_) => return Self::bad_request("bad_options", e.to_string()),
+            EngineError::BadOptions(_) => {
+                return Self::bad_request(ErrorCode::BadOptions, e.to_string());
+            }
             EngineError::UnknownPreset(..) => {
-                return Self::bad_request("unknown_preset", e.to_string());
+                return Self::bad_request(ErrorCode::UnknownPreset, e.to_string());
             }
-            EngineError::InvalidParameter { .. } => "option_out_of_range",
+            EngineError::InvalidParameter { .. } => ErrorCode::OptionOutOfRange,
             EngineError::EndpointOutside { .. } | EngineError::EndpointNotFinite { .. } => {
-                "endpoint_outside_image"
+                ErrorCode::EndpointOutsideImage
             }
-            EngineError::ImageTooSmall { .. } => "image_too_small",
+            EngineError::ImageTooSmall { .. } => ErrorCode::ImageTooSmall,
             EngineError::BadConfidences { .. } => return Self::Internal(e.to_string()),
         };
         Self::Unprocessable {
             code,
             message: e.to_string(),
+        }
+    }
+}
+
+impl From<PipelineError> for ApiError {
+    fn from(e: PipelineError) -> Self {
+        match e {
+            PipelineError::Decode(e) => e.into(),
+            PipelineError::Detect(e) => e.into(),
+            PipelineError::Engine(e) => e.into(),
+            PipelineError::Encode(message) => Self::Internal(message),
         }
     }
 }
@@ -174,7 +266,7 @@ impl IntoResponse for ApiError {
         };
         let body = ErrorBody {
             error: ErrorDetail {
-                code: self.code().to_string(),
+                code: self.code(),
                 message,
             },
         };

@@ -4,8 +4,14 @@
 //! known at start-up, stage names and rejection reasons.
 
 use std::sync::OnceLock;
+use std::time::Instant;
 
+use axum::extract::{MatchedPath, Request, State};
+use axum::middleware::Next;
+use axum::response::Response;
 use metrics_exporter_prometheus::{Matcher, PrometheusBuilder, PrometheusHandle};
+
+use super::state::AppState;
 
 /// Requests answered, by route, status class and preset.
 pub const REQUESTS: &str = "ariadne_requests_total";
@@ -68,4 +74,56 @@ pub fn stage(name: &'static str, ms: f64) {
 /// Records a rejection.
 pub fn reject(reason: &'static str) {
     metrics::counter!(REJECTIONS, "reason" => reason).increment(1);
+}
+
+/// Counts one answered request.
+pub fn count_request(route: &str, status: u16, preset: &str) {
+    metrics::counter!(
+        REQUESTS,
+        "route" => route.to_string(),
+        "status_class" => status_class(status),
+        "preset" => preset.to_string()
+    )
+    .increment(1);
+}
+
+/// Counts and times every request to a known route.
+pub async fn record_requests(
+    State(state): State<AppState>,
+    request: Request,
+    next: Next,
+) -> Response {
+    let started = Instant::now();
+    let route = request
+        .extensions()
+        .get::<MatchedPath>()
+        .map_or_else(|| "unmatched".to_string(), |m| m.as_str().to_string());
+    let preset = preset_label(&state, request.uri().query());
+    let response = next.run(request).await;
+    let status = response.status().as_u16();
+    count_request(&route, status, &preset);
+    metrics::histogram!(
+        REQUEST_SECONDS,
+        "route" => route,
+        "status_class" => status_class(status)
+    )
+    .record(started.elapsed().as_secs_f64());
+    response
+}
+
+/// The preset label of a request: a known preset's name, `default` when none is
+/// named, `unknown` otherwise (so callers cannot grow the label set).
+fn preset_label(state: &AppState, query: Option<&str>) -> String {
+    let named = query.and_then(|q| {
+        serde_urlencoded::from_str::<Vec<(String, String)>>(q)
+            .ok()?
+            .into_iter()
+            .find(|(k, _)| k == "preset")
+            .map(|(_, v)| v)
+    });
+    match named {
+        None => "default".into(),
+        Some(name) if state.presets.get(&name).is_some() => name,
+        Some(_) => "unknown".into(),
+    }
 }

@@ -4,21 +4,22 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use axum::body::Bytes;
-use axum::extract::{FromRequest, Multipart, RawQuery, Request, State};
+use axum::extract::{RawQuery, Request, State};
 use axum::http::{HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
-use serde_json::{Map, Value};
 use utoipa::{IntoParams, ToSchema};
 
-use super::AppState;
-use super::error::{ApiError, ErrorBody};
+use super::body::{Body, read_body};
+use super::error::{ApiError, ErrorBody, ErrorCode};
 use super::metrics;
 use super::request_id::RequestId;
+use super::state::AppState;
 use crate::decode;
-use crate::detect::{EndpointDetector, Ends};
-use crate::engine::{self, MaskKind, Params, render};
-use crate::report::{self, CableReport, SegmentResponse, Timings};
+use crate::detect::EndpointDetector;
+use crate::engine::{self, MaskKind, Params};
+use crate::pipeline::{self, EndsSource};
+use crate::report::{self, SegmentResponse};
 
 /// Query parameters of `POST /segment`.
 #[derive(Debug, Default, Deserialize, IntoParams)]
@@ -82,6 +83,7 @@ struct Job {
     overlay: bool,
     format: ResponseFormat,
     request_id: String,
+    max_pixels: u64,
 }
 
 /// The finished work: the mask PNG alone, or the document (its queue time and total
@@ -126,83 +128,22 @@ pub async fn segment(
     request: Request,
 ) -> Result<Response, ApiError> {
     let started = Instant::now();
-    let deadline = started + Duration::from_millis(state.config.deadline_ms);
+    let deadline_ms = state.config.deadline_ms;
+    let deadline = started + Duration::from_millis(deadline_ms);
     // The body is read before the query is judged, so that a client still uploading
     // gets its 400 rather than a reset connection.
-    let (image, part_ends, options) = read_body(&state, request).await?;
-    let query: SegmentQuery = match query.as_deref() {
-        None | Some("") => SegmentQuery::default(),
-        Some(q) => serde_urlencoded::from_str(q).map_err(|e| {
-            ApiError::bad_request("bad_query", format!("invalid query string: {e}"))
-        })?,
-    };
-    if part_ends.is_some() && query.endpoints.is_some() {
-        return Err(ApiError::bad_request(
-            "bad_endpoints",
-            "endpoints given both in the query and in the form; give them once",
-        ));
-    }
-    let ends = match part_ends.or(query.endpoints) {
-        Some(text) => Some(report::parse_endpoints(&text).map_err(|e| {
-            ApiError::bad_request(
-                "bad_endpoints",
-                format!("endpoints must be a JSON array of [x, y] pairs: {e}"),
-            )
-        })?),
-        None => None,
-    };
-    let preset = query.preset.as_deref().unwrap_or("default");
-    let base = state.presets.get(preset).ok_or_else(|| {
-        ApiError::bad_request(
-            "unknown_preset",
-            format!(
-                "unknown preset `{preset}` (known: {})",
-                state.presets.names().join(", ")
-            ),
-        )
-    })?;
-    let params = match options {
-        Some(o) => base.with_overrides(&o)?,
-        None => base.clone(),
-    };
-    // Header-only checks before the work is queued: type, then pixel count.
-    let (w, h) = decode::dimensions(&image)?;
-    let pixels = w as u64 * h as u64;
-    if pixels > state.config.max_pixels {
-        metrics::reject("too_many_pixels");
-        return Err(decode::DecodeError::TooManyPixels {
-            width: w,
-            height: h,
-            pixels,
-            limit: state.config.max_pixels,
-        }
-        .into());
-    }
-    if let Some(ends) = &ends {
-        engine::validate_ends(ends, w, h)?;
-    }
-
-    let job = Job {
-        image,
-        ends,
-        detector: state.detector.clone(),
-        params,
-        mask: query.mask.unwrap_or_default(),
-        overlay: query.overlay.unwrap_or(false),
-        format: query.format.unwrap_or_default(),
-        request_id: request_id.0.0.clone(),
-    };
+    let body = read_body(&state, request).await?;
+    let job = parse(&state, query.as_deref(), body, request_id.0.0.clone())?;
     let span = tracing::Span::current();
-    let max_pixels = state.config.max_pixels;
     let receiver = state
         .pool
         .try_submit(move || {
             let _entered = span.enter();
             if Instant::now() >= deadline {
                 // Nobody is waiting for this answer any more: skip the work.
-                return Err(ApiError::DeadlineExceeded(0));
+                return Err(ApiError::DeadlineExceeded { deadline_ms });
             }
-            run_job(job, max_pixels)
+            run_job(job)
         })
         .map_err(|_| {
             metrics::reject("queue_full");
@@ -215,7 +156,7 @@ pub async fn segment(
     let started_job = match finished {
         Err(_) => {
             metrics::reject("deadline");
-            return Err(ApiError::DeadlineExceeded(state.config.deadline_ms));
+            return Err(ApiError::DeadlineExceeded { deadline_ms });
         }
         Ok(Err(_)) => return Err(ApiError::Internal("worker dropped the job".into())),
         Ok(Ok(Err(panic))) => {
@@ -223,13 +164,11 @@ pub async fn segment(
         }
         Ok(Ok(Ok(started_job))) => started_job,
     };
-    let output = match started_job.value {
-        Err(ApiError::DeadlineExceeded(_)) => {
+    let output = started_job.value.inspect_err(|e| {
+        if matches!(e, ApiError::DeadlineExceeded { .. }) {
             metrics::reject("deadline");
-            return Err(ApiError::DeadlineExceeded(state.config.deadline_ms));
         }
-        other => other?,
-    };
+    })?;
     metrics::stage("queue", started_job.queued_ms);
     match output {
         Output::Png { png, cables } => {
@@ -249,187 +188,104 @@ pub async fn segment(
     }
 }
 
-/// Reads the image and the optional `endpoints` and `options` from a multipart form or
-/// a raw JPEG/PNG body.
-async fn read_body(
+/// Judges the query and the parts, and checks the image's type and pixel count from its
+/// header, before any work is queued.
+fn parse(
     state: &AppState,
-    request: Request,
-) -> Result<(Bytes, Option<String>, Option<Map<String, Value>>), ApiError> {
-    let content_type = request
-        .headers()
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if let Some(len) = request
-        .headers()
-        .get(header::CONTENT_LENGTH)
-        .and_then(|v| v.to_str().ok()?.parse::<usize>().ok())
-        && len > state.config.max_body_bytes
-    {
-        metrics::reject("body_too_large");
-        return Err(too_large_body(state.config.max_body_bytes));
-    }
-    if content_type.starts_with("multipart/form-data") {
-        let mut form = Multipart::from_request(request, state)
-            .await
-            .map_err(|e| ApiError::bad_request("bad_multipart", e.body_text()))?;
-        let (mut image, mut ends, mut options) = (None, None, None);
-        loop {
-            let field = match form.next_field().await {
-                Ok(Some(f)) => f,
-                Ok(None) => break,
-                Err(e) => return Err(multipart_error(state, e)),
-            };
-            let name = field.name().unwrap_or("").to_string();
-            match name.as_str() {
-                "image" => {
-                    image = Some(field.bytes().await.map_err(|e| multipart_error(state, e))?)
-                }
-                "endpoints" => {
-                    ends = Some(field.text().await.map_err(|e| multipart_error(state, e))?)
-                }
-                "options" => {
-                    let text = field.text().await.map_err(|e| multipart_error(state, e))?;
-                    let map: Map<String, Value> = serde_json::from_str(&text).map_err(|e| {
-                        ApiError::bad_request(
-                            "bad_options",
-                            format!("`options` must be a JSON object: {e}"),
-                        )
-                    })?;
-                    options = Some(map);
-                }
-                other => {
-                    return Err(ApiError::bad_request(
-                        "bad_multipart",
-                        format!("unknown form part `{other}` (expected image, endpoints, options)"),
-                    ));
-                }
-            }
-        }
-        let image = image.ok_or_else(|| {
-            ApiError::bad_request("missing_image", "the form has no `image` part")
-        })?;
-        if image.is_empty() {
-            return Err(ApiError::bad_request(
-                "empty_image",
-                "the `image` part is empty",
-            ));
-        }
-        return Ok((image, ends, options));
-    }
-    if content_type.starts_with("image/jpeg") || content_type.starts_with("image/png") {
-        let body = Bytes::from_request(request, state)
-            .await
-            .map_err(|e| body_error(state, e.status(), e.body_text(), "bad_body"))?;
-        if body.is_empty() {
-            return Err(ApiError::bad_request(
-                "empty_image",
-                "the request body is empty",
-            ));
-        }
-        return Ok((body, None, None));
-    }
-    Err(ApiError::UnsupportedMediaType(format!(
-        "unsupported Content-Type `{content_type}`: send multipart/form-data with an `image` part, or the raw image as image/jpeg or image/png"
-    )))
-}
-
-fn too_large_body(limit: usize) -> ApiError {
-    ApiError::TooLarge {
-        code: "body_too_large",
-        message: format!("the request body is over the limit of {limit} bytes"),
-    }
-}
-
-fn multipart_error(state: &AppState, e: axum::extract::multipart::MultipartError) -> ApiError {
-    body_error(state, e.status(), e.body_text(), "bad_multipart")
-}
-
-/// A body that could not be read: over the limit (413, counted), or malformed (400 with
-/// `code`).
-fn body_error(
-    state: &AppState,
-    status: axum::http::StatusCode,
-    text: String,
-    code: &'static str,
-) -> ApiError {
-    if status == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
-        metrics::reject("body_too_large");
-        too_large_body(state.config.max_body_bytes)
-    } else {
-        ApiError::bad_request(code, text)
-    }
-}
-
-/// The CPU part of a request: decode, segment, draw, encode. Runs on a worker.
-fn run_job(job: Job, max_pixels: u64) -> Result<Output, ApiError> {
-    let t = Instant::now();
-    let image = decode::decode_rgb(&job.image, max_pixels)?;
-    let decode_ms = ms(t);
-    let ends = match job.ends {
-        Some(points) => Ends::given(points),
-        None => {
-            let found = Ends::detected(job.detector.as_ref(), &image)?;
-            metrics::stage("endpoints", found.detect_ms);
-            found
-        }
+    query: Option<&str>,
+    body: Body,
+    request_id: String,
+) -> Result<Job, ApiError> {
+    let query: SegmentQuery = match query {
+        None | Some("") => SegmentQuery::default(),
+        Some(q) => serde_urlencoded::from_str(q).map_err(|e| {
+            ApiError::bad_request(ErrorCode::BadQuery, format!("invalid query string: {e}"))
+        })?,
     };
-    let seg =
-        engine::segment_with_confidence(&image, &ends.points, &ends.confidences, &job.params)?;
-    let t = Instant::now();
-    let mask = render::render_mask(&seg, job.mask, job.params.mask_width_px);
-    let overlay = job.overlay.then(|| render::overlay(&image, &seg));
-    let mask_ms = ms(t);
-    let t = Instant::now();
-    let mask_png = report::mask_png(&mask);
-    let output = match job.format {
-        ResponseFormat::Png => Output::Png {
-            png: mask_png,
-            cables: seg.cables.len(),
+    if body.endpoints.is_some() && query.endpoints.is_some() {
+        return Err(ApiError::bad_request(
+            ErrorCode::BadEndpoints,
+            "endpoints given both in the query and in the form; give them once",
+        ));
+    }
+    let ends = match body.endpoints.or(query.endpoints) {
+        Some(text) => Some(report::parse_endpoints(&text).map_err(|e| {
+            ApiError::bad_request(
+                ErrorCode::BadEndpoints,
+                format!("endpoints must be a JSON array of [x, y] pairs: {e}"),
+            )
+        })?),
+        None => None,
+    };
+    let preset = query.preset.as_deref().unwrap_or("default");
+    let base = state.presets.get(preset).ok_or_else(|| {
+        ApiError::bad_request(
+            ErrorCode::UnknownPreset,
+            format!(
+                "unknown preset `{preset}` (known: {})",
+                state.presets.names().join(", ")
+            ),
+        )
+    })?;
+    let params = match body.options {
+        Some(o) => base.with_overrides(&o)?,
+        None => base.clone(),
+    };
+    let (w, h) = decode::dimensions(&body.image)?;
+    let pixels = w as u64 * h as u64;
+    if pixels > state.config.max_pixels {
+        metrics::reject("too_many_pixels");
+        return Err(decode::DecodeError::TooManyPixels {
+            width: w,
+            height: h,
+            pixels,
+            limit: state.config.max_pixels,
+        }
+        .into());
+    }
+    if let Some(ends) = &ends {
+        engine::validate_ends(ends, w, h)?;
+    }
+    Ok(Job {
+        image: body.image,
+        ends,
+        detector: state.detector.clone(),
+        params,
+        mask: query.mask.unwrap_or_default(),
+        overlay: query.overlay.unwrap_or(false),
+        format: query.format.unwrap_or_default(),
+        request_id,
+        max_pixels: state.config.max_pixels,
+    })
+}
+
+/// The CPU part of a request, on a worker: the pipeline, its stages recorded.
+fn run_job(job: Job) -> Result<Output, ApiError> {
+    let json = job.format == ResponseFormat::Json;
+    let out = pipeline::run(&pipeline::Job {
+        bytes: &job.image,
+        ends: match &job.ends {
+            Some(points) => EndsSource::Given(points),
+            None => EndsSource::Detect(job.detector.as_ref()),
         },
-        ResponseFormat::Json => {
-            let overlay_png = overlay.map(|o| {
-                report::base64(&report::png(
-                    o.as_raw(),
-                    o.width(),
-                    o.height(),
-                    image::ExtendedColorType::Rgb8,
-                ))
-            });
-            Output::Json(Box::new(SegmentResponse {
-                request_id: job.request_id,
-                width: seg.width,
-                height: seg.height,
-                cables: seg.cables.iter().map(CableReport::from).collect(),
-                endpoints: report::endpoint_reports(&seg, &ends.points, &ends.confidences),
-                mask_png: report::base64(&mask_png),
-                overlay_png,
-                timings_ms: Timings {
-                    decode: decode_ms,
-                    endpoints: ends.detect_ms,
-                    mask: mask_ms,
-                    encode: ms(t),
-                    ..Timings::default()
-                }
-                .with_engine(&seg),
-            }))
+        params: &job.params,
+        max_pixels: job.max_pixels,
+        mask: job.mask,
+        overlay: job.overlay && json,
+        encode: true,
+    })?;
+    for (name, ms) in out.timings.stages() {
+        // Inference is timed only when it ran.
+        if name != "endpoints" || job.ends.is_none() {
+            metrics::stage(name, ms);
         }
-    };
-    for (name, value) in [
-        ("decode", decode_ms),
-        ("superpixels", seg.timings.superpixels),
-        ("graph", seg.timings.graph),
-        ("walks", seg.timings.walks),
-        ("splines", seg.timings.splines),
-        ("mask", mask_ms),
-        ("encode", ms(t)),
-    ] {
-        metrics::stage(name, value);
     }
-    Ok(output)
-}
-
-fn ms(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
+    Ok(if json {
+        Output::Json(Box::new(SegmentResponse::new(&out, job.request_id)))
+    } else {
+        Output::Png {
+            cables: out.segmentation.cables.len(),
+            png: out.mask_png.unwrap_or_default(),
+        }
+    })
 }

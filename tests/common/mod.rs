@@ -1,4 +1,8 @@
-//! Shared by the integration tests that score the development split.
+//! Shared by the integration tests: scoring the development split, and a real server.
+// Each test binary uses a different part of this module.
+#![allow(dead_code)]
+
+pub mod app;
 
 use ariadne_dlo::detect::EndpointDetector;
 use ariadne_dlo::engine::Params;

@@ -10,6 +10,10 @@ use serde_json::{Map, Value};
 
 use super::EngineError;
 
+mod ranges;
+
+pub use ranges::RANGES;
+
 /// All tunable parameters of the engine, flat so that a JSON override such as
 /// `{"n_segments": 1500}` names a field directly.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -102,6 +106,68 @@ pub struct Params {
     /// measured width of each cable. The default, 7, is the stroke of the dataset's
     /// hand-drawn masks.
     pub mask_width_px: f32,
+
+    // --- walk details ---
+    /// Lab distance at which a vertex's lateral contrast saturates at 1 (a clearly
+    /// visible edge).
+    pub contrast_saturation: f32,
+    /// A head counts as heading out of the frame when the component of its unit heading
+    /// towards the near edge is at least this.
+    pub border_outward_cos: f32,
+    /// A walk that finds no next vertex still closes on another end straight ahead
+    /// within this many `close_radius_px` (the last superpixels before a terminal are
+    /// often not the cable's colour).
+    pub stopped_seed_reach: f32,
+    /// A walk that finds no next vertex leaves through the border when within this many
+    /// `border_margin_px` of an edge it heads to.
+    pub stopped_border_reach: f32,
+    /// Exponent of the colour agreement in a walk's quality.
+    pub quality_visual_exponent: f32,
+    /// Exponent of the lateral contrast in a walk's quality (a walk over plain
+    /// background has low contrast: this is what drops it).
+    pub quality_contrast_exponent: f32,
+
+    // --- pairing details ---
+    /// Lost walks shorter than this many `min_cable_length_px` are not joined.
+    pub join_min_length: f32,
+
+    // --- model details ---
+    /// Fit weight of a given end relative to one superpixel centroid (ends are exact).
+    pub end_weight: f32,
+    /// Centroids closer than this many `close_radius_px` to the far end are dropped
+    /// before the fit (they may lie beside or beyond it).
+    pub far_end_trim: f32,
+    /// A cable leaving through the border is extended to the border when it lies
+    /// within this many superpixel steps.
+    pub border_exit_steps: f32,
+    /// Refinement passes (each re-reads the image around the previous curve).
+    pub refine_passes: u32,
+    /// Distance between the samples of a refinement profile, pixels.
+    pub refine_profile_step_px: f32,
+    /// A refinement profile is read every this many polyline points.
+    pub refine_profile_stride: u32,
+    /// A profile end closer than this (Lab ΔE) to the cable colour is not background,
+    /// and the profile is skipped.
+    pub refine_min_background_de: f32,
+    /// Narrowest width a profile may measure, pixels.
+    pub refine_min_width_px: f32,
+
+    // --- cables with no end in view ---
+    /// Lab ΔE from the border's median colour at which a border superpixel stands out.
+    pub border_min_contrast: f32,
+    /// Shortest run of standing-out border pixels taken as a crossing (JPEG specks).
+    pub border_min_crossing_px: u32,
+    /// Longest run taken as a crossing (longer runs are objects along the border).
+    pub border_max_crossing_px: u32,
+    /// A border seed counts as this sure as a given end.
+    pub border_seed_confidence: f32,
+    /// Lowest score of a cable found from border seeds alone.
+    pub border_min_score: f32,
+    /// Shortest such cable, in superpixel steps.
+    pub border_min_steps: f32,
+    /// Largest fraction of such a walk's superpixels that may belong to cables already
+    /// found (a walk along one of them explains nothing new).
+    pub border_max_covered: f32,
 }
 
 /// Names of the built-in presets, in the order `--help` lists them.
@@ -143,6 +209,28 @@ impl Default for Params {
             border_cables: true,
             refine_radius_px: 16.0,
             mask_width_px: 7.0,
+            contrast_saturation: 25.0,
+            border_outward_cos: 0.3,
+            stopped_seed_reach: 2.0,
+            stopped_border_reach: 2.0,
+            quality_visual_exponent: 0.5,
+            quality_contrast_exponent: 2.0,
+            join_min_length: 0.5,
+            end_weight: 25.0,
+            far_end_trim: 0.5,
+            border_exit_steps: 3.0,
+            refine_passes: 2,
+            refine_profile_step_px: 0.5,
+            refine_profile_stride: 2,
+            refine_min_background_de: 10.0,
+            refine_min_width_px: 2.0,
+            border_min_contrast: 20.0,
+            border_min_crossing_px: 3,
+            border_max_crossing_px: 40,
+            border_seed_confidence: 0.5,
+            border_min_score: 0.35,
+            border_min_steps: 5.0,
+            border_max_covered: 0.25,
         }
     }
 }
@@ -168,10 +256,7 @@ impl Params {
     /// These parameters with the fields named in `overrides` replaced, then validated.
     /// Unknown field names and values of the wrong type are rejected.
     pub fn with_overrides(&self, overrides: &Map<String, Value>) -> Result<Self, EngineError> {
-        let mut merged = match serde_json::to_value(self) {
-            Ok(Value::Object(map)) => map,
-            _ => unreachable!("Params always serialises to an object"),
-        };
+        let mut merged = self.fields();
         for (key, value) in overrides {
             merged.insert(key.clone(), value.clone());
         }
@@ -181,142 +266,12 @@ impl Params {
         Ok(params)
     }
 
-    /// Checks every field against its allowed range.
-    pub fn validate(&self) -> Result<(), EngineError> {
-        check(
-            "n_segments",
-            self.n_segments as f32,
-            16.0,
-            20_000.0,
-            "16 ..= 20000",
-        )?;
-        check(
-            "compactness",
-            self.compactness,
-            0.01,
-            1000.0,
-            "0.01 ..= 1000",
-        )?;
-        check("sigma", self.sigma, 0.0, 10.0, "0 ..= 10")?;
-        check(
-            "slic_iterations",
-            self.slic_iterations as f32,
-            1.0,
-            50.0,
-            "1 ..= 50",
-        )?;
-        check("min_size_factor", self.min_size_factor, 0.0, 1.0, "0 ..= 1")?;
-        check("hist_bins", self.hist_bins as f32, 1.0, 16.0, "1 ..= 16")?;
-        check(
-            "neighbourhood_order",
-            self.neighbourhood_order as f32,
-            1.0,
-            8.0,
-            "1 ..= 8",
-        )?;
-        check("jump_order", self.jump_order as f32, 1.0, 12.0, "1 ..= 12")?;
-        check("c_visual", self.c_visual, 0.01, 1000.0, "0.01 ..= 1000")?;
-        check("c_distance", self.c_distance, 0.01, 1000.0, "0.01 ..= 1000")?;
-        check("max_step_px", self.max_step_px, 1.0, 1000.0, "1 ..= 1000")?;
-        check("kappa", self.kappa, 0.0, 100.0, "0 ..= 100")?;
-        check("max_turn_deg", self.max_turn_deg, 1.0, 180.0, "1 ..= 180")?;
-        check(
-            "heading_span_px",
-            self.heading_span_px,
-            1.0,
-            500.0,
-            "1 ..= 500",
-        )?;
-        check(
-            "close_radius_px",
-            self.close_radius_px,
-            1.0,
-            500.0,
-            "1 ..= 500",
-        )?;
-        check("min_similarity", self.min_similarity, 0.0, 1.0, "0 ..= 1")?;
-        check("min_contrast", self.min_contrast, 0.0, 1.0, "0 ..= 1")?;
-        check("model_rate", self.model_rate, 0.0, 1.0, "0 ..= 1")?;
-        check(
-            "border_margin_px",
-            self.border_margin_px,
-            0.0,
-            200.0,
-            "0 ..= 200",
-        )?;
-        check(
-            "max_steps",
-            self.max_steps as f32,
-            1.0,
-            10_000.0,
-            "1 ..= 10000",
-        )?;
-        check(
-            "unconfirmed_factor",
-            self.unconfirmed_factor,
-            0.0,
-            1.0,
-            "0 ..= 1",
-        )?;
-        check("border_factor", self.border_factor, 0.0, 1.0, "0 ..= 1")?;
-        check("lost_factor", self.lost_factor, 0.0, 1.0, "0 ..= 1")?;
-        check(
-            "join_radius_px",
-            self.join_radius_px,
-            0.0,
-            1000.0,
-            "0 ..= 1000",
-        )?;
-        check("min_cable_score", self.min_cable_score, 0.0, 1.0, "0 ..= 1")?;
-        check(
-            "min_cable_length_px",
-            self.min_cable_length_px,
-            0.0,
-            10_000.0,
-            "0 ..= 10000",
-        )?;
-        check("smoothing", self.smoothing, 0.0, 1e6, "0 ..= 1e6")?;
-        check(
-            "knot_spacing_px",
-            self.knot_spacing_px,
-            2.0,
-            10_000.0,
-            "2 ..= 10000",
-        )?;
-        check(
-            "polyline_step_px",
-            self.polyline_step_px,
-            0.1,
-            100.0,
-            "0.1 ..= 100",
-        )?;
-        check(
-            "refine_radius_px",
-            self.refine_radius_px,
-            1.0,
-            100.0,
-            "1 ..= 100",
-        )?;
-        check("mask_width_px", self.mask_width_px, 0.0, 200.0, "0 ..= 200")?;
-        Ok(())
-    }
-}
-
-fn check(
-    name: &'static str,
-    value: f32,
-    min: f32,
-    max: f32,
-    expected: &'static str,
-) -> Result<(), EngineError> {
-    if value.is_finite() && (min..=max).contains(&value) {
-        Ok(())
-    } else {
-        Err(EngineError::InvalidParameter {
-            name,
-            value: value.to_string(),
-            expected,
-        })
+    /// The parameters as a JSON object, field name to value.
+    pub(super) fn fields(&self) -> Map<String, Value> {
+        match serde_json::to_value(self) {
+            Ok(Value::Object(map)) => map,
+            _ => unreachable!("Params always serialises to an object"),
+        }
     }
 }
 

@@ -1,0 +1,238 @@
+//! The flags of every sub-command (clap lives here and nowhere below the command line):
+//! each settings struct has an environment twin per flag and becomes the plain config
+//! the library takes.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+use clap::ValueEnum;
+
+use crate::detect::{DetectorConfig, ModelKind};
+use crate::engine::MaskKind;
+use crate::http::{LogFormat, ServeConfig};
+
+/// Mask kinds on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum MaskArg {
+    /// 0/255.
+    Binary,
+    /// Cable k has value k+1.
+    Labels,
+    /// Each cable in its own colour.
+    Color,
+}
+
+impl From<MaskArg> for MaskKind {
+    fn from(m: MaskArg) -> Self {
+        match m {
+            MaskArg::Binary => MaskKind::Binary,
+            MaskArg::Labels => MaskKind::Labels,
+            MaskArg::Color => MaskKind::Color,
+        }
+    }
+}
+
+/// Detector flags, shared by `serve`, `segment` and `eval`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DetectorArgs {
+    /// ONNX model of cable ends.
+    #[arg(long, env = "ARIADNE_MODEL", default_value_os_t = DetectorConfig::default().model)]
+    pub model: PathBuf,
+    /// Output convention of the model: heatmap (the bundled model) or yolo
+    /// (ultralytics `[1, 4+classes, N]`; box centres become ends).
+    #[arg(long, env = "ARIADNE_MODEL_KIND", default_value = "heatmap")]
+    pub model_kind: ModelKind,
+    /// Network input width; the photo is resized to fit, keeping its aspect ratio.
+    #[arg(long, env = "ARIADNE_MODEL_INPUT_WIDTH", default_value_t = DetectorConfig::default().model_input_width)]
+    pub model_input_width: usize,
+    /// Network input height.
+    #[arg(long, env = "ARIADNE_MODEL_INPUT_HEIGHT", default_value_t = DetectorConfig::default().model_input_height)]
+    pub model_input_height: usize,
+    /// Lowest detection confidence kept as an end.
+    #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = DetectorConfig::default().detect_threshold)]
+    pub detect_threshold: f32,
+    /// Ends closer than this many photo pixels are merged (the more confident is kept).
+    #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = DetectorConfig::default().detect_nms_px)]
+    pub detect_nms_px: f64,
+    /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
+    #[arg(long, env = "ARIADNE_ORT_THREADS", default_value_t = DetectorConfig::default().ort_threads)]
+    pub ort_threads: usize,
+    /// ONNX Runtime shared library (libonnxruntime.so 1.31) [default: .ort/, next to
+    /// the executable, /usr/local/lib; `make setup` fetches it].
+    #[arg(long, env = "ORT_DYLIB_PATH")]
+    pub ort_library: Option<PathBuf>,
+}
+
+impl From<DetectorArgs> for DetectorConfig {
+    fn from(a: DetectorArgs) -> Self {
+        Self {
+            model: a.model,
+            model_kind: a.model_kind,
+            model_input_width: a.model_input_width,
+            model_input_height: a.model_input_height,
+            detect_threshold: a.detect_threshold,
+            detect_nms_px: a.detect_nms_px,
+            ort_threads: a.ort_threads,
+            ort_library: a.ort_library,
+        }
+    }
+}
+
+/// Flags of `ariadne serve`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ServeArgs {
+    /// Address to listen on.
+    #[arg(long, env = "ARIADNE_BIND", default_value_t = ServeConfig::default().bind)]
+    pub bind: SocketAddr,
+    /// Worker threads for CPU work [default: the CPUs available to the process].
+    #[arg(long, env = "ARIADNE_WORKERS")]
+    pub workers: Option<usize>,
+    /// Requests that may wait for a worker; more are answered 429 at once.
+    #[arg(long, env = "ARIADNE_QUEUE", default_value_t = ServeConfig::default().queue)]
+    pub queue: usize,
+    /// Per-request deadline in milliseconds, queueing included; later answers are 504.
+    #[arg(long, env = "ARIADNE_DEADLINE_MS", default_value_t = ServeConfig::default().deadline_ms)]
+    pub deadline_ms: u64,
+    /// Largest accepted request body, bytes.
+    #[arg(long, env = "ARIADNE_MAX_BODY_BYTES", default_value_t = ServeConfig::default().max_body_bytes)]
+    pub max_body_bytes: usize,
+    /// Largest accepted image, pixels (width × height, read from the header).
+    #[arg(long, env = "ARIADNE_MAX_PIXELS", default_value_t = ServeConfig::default().max_pixels)]
+    pub max_pixels: u64,
+    /// Seconds `Retry-After` asks rejected clients to wait.
+    #[arg(long, env = "ARIADNE_RETRY_AFTER_S", default_value_t = ServeConfig::default().retry_after_s)]
+    pub retry_after_s: u64,
+    /// JSON file of extra or overriding presets: {"name": {"n_segments": 1500, ...}, ...}.
+    #[arg(long, env = "ARIADNE_PRESETS")]
+    pub presets: Option<PathBuf>,
+    /// Log format: text or json.
+    #[arg(long, env = "ARIADNE_LOG_FORMAT", default_value = "text")]
+    pub log_format: LogFormat,
+    /// Seconds between a shutdown signal and closing the listener, during which
+    /// /readyz answers 503 so that load balancers stop sending work.
+    #[arg(long, env = "ARIADNE_SHUTDOWN_DELAY_S", default_value_t = ServeConfig::default().shutdown_delay_s)]
+    pub shutdown_delay_s: u64,
+    /// Seconds in-flight requests get to finish after the listener closes.
+    #[arg(long, env = "ARIADNE_SHUTDOWN_GRACE_S", default_value_t = ServeConfig::default().shutdown_grace_s)]
+    pub shutdown_grace_s: u64,
+    /// The endpoint detector, run when a request gives no ends.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
+}
+
+impl From<ServeArgs> for ServeConfig {
+    fn from(a: ServeArgs) -> Self {
+        Self {
+            bind: a.bind,
+            workers: a.workers,
+            queue: a.queue,
+            deadline_ms: a.deadline_ms,
+            max_body_bytes: a.max_body_bytes,
+            max_pixels: a.max_pixels,
+            retry_after_s: a.retry_after_s,
+            presets: a.presets,
+            log_format: a.log_format,
+            shutdown_delay_s: a.shutdown_delay_s,
+            shutdown_grace_s: a.shutdown_grace_s,
+            detector: a.detector.into(),
+        }
+    }
+}
+
+/// Arguments of `ariadne segment`.
+#[derive(Debug, clap::Args)]
+pub struct SegmentArgs {
+    /// JPEG or PNG photograph.
+    pub image: PathBuf,
+    /// Cable ends as a JSON array of pixel coordinates, e.g. '[[120,40],[300,210.5]]'.
+    #[arg(long)]
+    pub endpoints: Option<String>,
+    /// Parameter preset (default, clutter).
+    #[arg(long, default_value = "default")]
+    pub preset: String,
+    /// Parameter overrides as a JSON object, e.g. '{"n_segments": 1500}'.
+    #[arg(long)]
+    pub options: Option<String>,
+    /// Write the JSON result here ('-' for standard output).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the mask PNG here.
+    #[arg(long)]
+    pub mask: Option<PathBuf>,
+    /// Kind of mask written by --mask.
+    #[arg(long, value_enum, default_value = "binary")]
+    pub mask_kind: MaskArg,
+    /// Write the photo with the curves drawn on it here (PNG).
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
+    /// The endpoint detector, used when --endpoints is not given.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
+}
+
+/// Where `eval` takes the cable ends from.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum EndsArg {
+    /// The true terminals: ends of the annotated centrelines not on the border.
+    Gt,
+    /// The endpoint detector's.
+    Detect,
+}
+
+/// Arguments of `ariadne eval`.
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// Dataset folder [default: $ARIADNE_DATASET or ../shared/datasets/cables].
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Source of the cable ends.
+    #[arg(long, value_enum, default_value = "gt")]
+    pub endpoints: EndsArg,
+    /// Parameter preset for the `simple` set (and any other).
+    #[arg(long, default_value = "default")]
+    pub preset: String,
+    /// Parameter preset for the `hard` set.
+    #[arg(long, default_value = "clutter")]
+    pub hard_preset: String,
+    /// Parameter overrides as a JSON object, applied to both presets.
+    #[arg(long)]
+    pub options: Option<String>,
+    /// Print one JSON document instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// The endpoint detector, used with --endpoints detect.
+    #[command(flatten)]
+    pub detector: DetectorArgs,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrapper {
+        #[command(flatten)]
+        serve: ServeArgs,
+    }
+
+    #[test]
+    fn flag_defaults_are_the_config_defaults() {
+        let parsed: ServeConfig = Wrapper::parse_from(["ariadne"]).serve.into();
+        assert_eq!(parsed, ServeConfig::default());
+        let flags = Wrapper::parse_from([
+            "ariadne",
+            "--workers",
+            "3",
+            "--log-format",
+            "json",
+            "--model-kind",
+            "yolo",
+        ]);
+        let config: ServeConfig = flags.serve.into();
+        assert_eq!(config.workers, Some(3));
+        assert_eq!(config.log_format, LogFormat::Json);
+        assert_eq!(config.detector.model_kind, ModelKind::Yolo);
+        assert!(Wrapper::try_parse_from(["ariadne", "--log-format", "xml"]).is_err());
+    }
+}

@@ -1,0 +1,127 @@
+//! `ariadne segment` and `ariadne eval`.
+
+use crate::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
+use crate::eval::{self, ImageResult};
+use crate::pipeline::{self, EndsSource};
+use crate::report::{self, SegmentResponse};
+
+use super::args::{EndsArg, EvalArgs, SegmentArgs};
+use super::{CliError, params_from, write};
+
+/// Segments one photo and writes what was asked for.
+pub fn segment(args: SegmentArgs) -> Result<(), CliError> {
+    let params = params_from(&args.preset, args.options.as_deref())?;
+    let given = match &args.endpoints {
+        Some(text) => Some(report::parse_endpoints(text).map_err(CliError::BadEndpoints)?),
+        None => None,
+    };
+    let bytes = std::fs::read(&args.image).map_err(|e| CliError::Io(args.image.clone(), e))?;
+    let detector = match given {
+        Some(_) => None,
+        None => Some(OnnxDetector::load(&DetectorConfig::from(args.detector), 1)?),
+    };
+    let ends = match (&given, &detector) {
+        (Some(points), _) => EndsSource::Given(points),
+        (None, Some(d)) => EndsSource::Detect(d),
+        (None, None) => unreachable!("a detector is loaded when no ends are given"),
+    };
+    let out = pipeline::run(&pipeline::Job {
+        bytes: &bytes,
+        ends,
+        params: &params,
+        max_pixels: u64::MAX,
+        mask: args.mask_kind.into(),
+        overlay: args.overlay.is_some(),
+        encode: true,
+    })
+    .map_err(|e| CliError::Image(args.image.clone(), e))?;
+    if let (Some(path), Some(png)) = (&args.mask, &out.mask_png) {
+        write(path, png)?;
+    }
+    if let (Some(path), Some(png)) = (&args.overlay, &out.overlay_png) {
+        write(path, png)?;
+    }
+    if let Some(path) = &args.json {
+        let response = SegmentResponse::new(&out, format!("cli-{}", uuid::Uuid::new_v4()));
+        let mut text = serde_json::to_vec_pretty(&response)
+            .map_err(|e| CliError::BadOptions(e.to_string()))?;
+        text.push(b'\n');
+        write(path, &text)?;
+    }
+    eprintln!(
+        "{} cable(s) from {} end(s) in {:.1} ms",
+        out.segmentation.cables.len(),
+        out.ends.points.len(),
+        out.timings.total
+    );
+    Ok(())
+}
+
+/// Scores the engine on a dataset folder and prints per-image lines and set tables.
+pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
+    let dir = args
+        .dataset
+        .clone()
+        .unwrap_or_else(eval::default_dataset_dir);
+    let samples = eval::load_dataset(&dir)?;
+    let simple = params_from(&args.preset, args.options.as_deref())?;
+    let hard = params_from(&args.hard_preset, args.options.as_deref())?;
+    let loaded = match args.endpoints {
+        EndsArg::Gt => None,
+        EndsArg::Detect => Some(OnnxDetector::load(
+            &DetectorConfig::from(args.detector.clone()),
+            1,
+        )?),
+    };
+    let print = |r: &ImageResult| {
+        if !args.json {
+            let t = &r.timings_ms;
+            println!(
+                "{:<7} {}  IoU {:.3}  cables {}/{} found {}  ends {} ({}/{} terminals)  ms: ends {:.1} sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
+                r.set,
+                r.name,
+                r.iou,
+                r.matched_cables,
+                r.gt_cables,
+                r.found_cables,
+                r.ends,
+                r.terminals_matched,
+                r.terminals,
+                t.endpoints,
+                t.superpixels,
+                t.graph,
+                t.walks,
+                t.splines,
+                t.mask,
+                t.total
+            );
+        }
+    };
+    let detector = loaded.as_ref().map(|d| d as &dyn EndpointDetector);
+    let results = eval::evaluate_all(&samples, &simple, &hard, detector, print)?;
+    let summaries = eval::summarise(&results);
+    if args.json {
+        let doc = serde_json::json!({ "dataset": dir, "images": results, "sets": summaries });
+        println!("{}", serde_json::to_string_pretty(&doc).unwrap_or_default());
+    } else {
+        println!();
+        println!(
+            "set      images  weighted IoU  cable recall  cable precision  matched IoU  end recall  end precision  median ms"
+        );
+        for s in &summaries {
+            println!(
+                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>10.3}  {:>13.3}  {:>9.1}",
+                s.set,
+                s.images,
+                s.weighted_iou,
+                s.cable_recall,
+                s.cable_precision,
+                s.matched_iou,
+                s.terminal_recall,
+                s.terminal_precision,
+                s.median_total_ms
+            );
+        }
+    }
+    Ok(())
+}

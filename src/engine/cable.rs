@@ -1,0 +1,176 @@
+//! Modelling one cable from its chosen walk: data points, penalised B-spline fit,
+//! refinement on the image, and the measurements reported with it.
+
+use image::RgbImage;
+
+use super::Params;
+use super::color::LabImage;
+use super::geometry::{border_exit, dist, heading, median, polyline_length};
+use super::graph::Graph;
+use super::pairing::{FarEnd, Pairing};
+use super::refine;
+use super::spline::BSpline;
+use super::superpixels::Superpixels;
+use super::walk::{Seed, Walk};
+
+/// One cable found in the image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cable {
+    /// Index in [`Segmentation::cables`]; label masks use `id + 1`.
+    pub id: usize,
+    /// First and last point of the centreline, pixels.
+    pub ends: [[f32; 2]; 2],
+    /// For each of `ends`, the index of the given end it is, or `None` where the cable
+    /// leaves the frame or was lost.
+    pub end_indices: [Option<usize>; 2],
+    /// The centreline model.
+    pub spline: BSpline,
+    /// Dense samples of the spline from `ends[0]` to `ends[1]`.
+    pub polyline: Vec<[f32; 2]>,
+    /// Length of the polyline, pixels.
+    pub length_px: f32,
+    /// Width measured across the curve on the image, pixels.
+    pub width_px: f32,
+    /// Median sRGB colour along the centreline.
+    pub color: [u8; 3],
+    /// Confidence in 0..=1.
+    pub score: f32,
+}
+
+/// Everything the modelling of one cable reads: the earlier stages' results.
+#[derive(Clone, Copy)]
+pub(super) struct Scene<'a> {
+    pub walks: &'a [Walk],
+    pub seeds: &'a [Seed],
+    pub graph: &'a Graph,
+    pub sp: &'a Superpixels,
+    pub lab: &'a LabImage,
+    pub image: &'a RgbImage,
+    pub params: &'a Params,
+}
+
+/// Builds the spline model of one chosen walk: data points from the walk, fit,
+/// refinement on the image, final fit and measurements.
+pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> {
+    let Scene {
+        walks,
+        seeds,
+        graph,
+        sp,
+        lab,
+        image,
+        params,
+    } = *scene;
+    let walk = &walks[choice.walk];
+    let start = seeds[choice.start].point;
+    let mut points = vec![start];
+    let mut weights = vec![params.end_weight];
+    points.extend(
+        walk.vertices[1..]
+            .iter()
+            .map(|&v| graph.vertices[v as usize].centroid),
+    );
+    if let Some(j) = choice.joined {
+        let other = &walks[j];
+        points.extend(
+            other.vertices[1..]
+                .iter()
+                .rev()
+                .map(|&v| graph.vertices[v as usize].centroid),
+        );
+    }
+    weights.resize(points.len(), 1.0);
+    let far_index = match choice.far {
+        FarEnd::Seed(t) => {
+            let target = seeds[t].point;
+            // Centroids next to the far end may lie beside or beyond it: the end is exact.
+            while points.len() > 2
+                && dist(points[points.len() - 1], target)
+                    < params.close_radius_px * params.far_end_trim
+            {
+                points.pop();
+                weights.pop();
+            }
+            points.push(target);
+            weights.push(params.end_weight);
+            Some(t)
+        }
+        FarEnd::Border => {
+            let dir = heading(&points, params.heading_span_px);
+            let reach = params.border_exit_steps * sp.step;
+            let last = points[points.len() - 1];
+            if let Some(exit) = border_exit(last, dir, sp.width, sp.height, reach) {
+                points.push(exit);
+                weights.push(1.0);
+            }
+            None
+        }
+        FarEnd::Open => None,
+    };
+    let mut spline = BSpline::fit(&points, &weights, params.knot_spacing_px, params.smoothing)?;
+    let mut polyline = spline.sample(params.polyline_step_px);
+    let mut width = None;
+    if params.refine {
+        for _ in 0..params.refine_passes {
+            let refined = refine::refine(&polyline, lab, params);
+            width = refined.width_px.or(width);
+            let mut pts = refined.points;
+            let mut w = vec![1.0; pts.len()];
+            // The given ends stay where they were given.
+            pts[0] = start;
+            w[0] = params.end_weight;
+            if let Some(t) = far_index {
+                let last = pts.len() - 1;
+                pts[last] = seeds[t].point;
+                w[last] = params.end_weight;
+            }
+            spline = BSpline::fit(&pts, &w, params.knot_spacing_px, params.smoothing)?;
+            polyline = spline.sample(params.polyline_step_px);
+        }
+    }
+    let width_px = width.unwrap_or_else(|| fallback_width(walk, graph, sp));
+    let length_px = polyline_length(&polyline);
+    Some(Cable {
+        id: 0,
+        ends: [polyline[0], polyline[polyline.len() - 1]],
+        end_indices: [Some(choice.start), far_index],
+        color: median_rgb(image, &polyline),
+        spline,
+        polyline,
+        length_px,
+        width_px,
+        score: choice.score.clamp(0.0, 1.0),
+    })
+}
+
+/// Cap of the fallback width, in superpixel steps (a merged superpixel can be large).
+const FALLBACK_MAX_STEPS: f32 = 2.0;
+
+/// Width from the walk's superpixels when the image could not be read: a superpixel on
+/// a cable spans about its width, so the side of the mean superpixel's square.
+fn fallback_width(walk: &Walk, graph: &Graph, sp: &Superpixels) -> f32 {
+    let n = walk.vertices.len().max(1) as f32;
+    let area: f32 = walk
+        .vertices
+        .iter()
+        .map(|&v| graph.vertices[v as usize].pixels as f32)
+        .sum::<f32>()
+        / n;
+    area.sqrt().min(sp.step * FALLBACK_MAX_STEPS)
+}
+
+/// Per-channel median sRGB colour of `image` along `line`.
+fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
+    let (w, h) = image.dimensions();
+    let mut channels: [Vec<u8>; 3] = Default::default();
+    for p in line {
+        let (x, y) = (p[0].round(), p[1].round());
+        if x >= 0.0 && y >= 0.0 && (x as u32) < w && (y as u32) < h {
+            let px = image.get_pixel(x as u32, y as u32).0;
+            for c in 0..3 {
+                channels[c].push(px[c]);
+            }
+        }
+    }
+    channels.map(|mut ch| median(&mut ch, u8::cmp).unwrap_or(0))
+}

@@ -1,0 +1,119 @@
+//! Plane geometry shared by the engine's stages: distances, headings, medians.
+
+/// Euclidean distance between two points, pixels.
+#[inline]
+pub fn dist(a: [f32; 2], b: [f32; 2]) -> f32 {
+    norm([a[0] - b[0], a[1] - b[1]])
+}
+
+/// Length of a 2-D vector.
+#[inline]
+pub fn norm(v: [f32; 2]) -> f32 {
+    (v[0] * v[0] + v[1] * v[1]).sqrt()
+}
+
+/// Euclidean distance between two colours (e.g. CIELAB ΔE76).
+#[inline]
+pub fn dist3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// `v` scaled to unit length, or `fallback` when it is (nearly) zero.
+#[inline]
+pub fn unit_or(v: [f32; 2], fallback: [f32; 2]) -> [f32; 2] {
+    let n = norm(v);
+    if n < 1e-6 {
+        fallback
+    } else {
+        [v[0] / n, v[1] / n]
+    }
+}
+
+/// Length of a polyline, pixels.
+pub fn polyline_length(line: &[[f32; 2]]) -> f32 {
+    line.windows(2).map(|w| dist(w[0], w[1])).sum()
+}
+
+/// Unit heading of a path: from the last point at least `span` pixels back (or the
+/// first point) to the newest point; `[1, 0]` for a path too short to have one.
+pub fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {
+    let Some(&head) = points.last() else {
+        return [1.0, 0.0];
+    };
+    let mut from = points[0];
+    let mut acc = 0.0;
+    for w in points.windows(2).rev() {
+        acc += dist(w[0], w[1]);
+        from = w[0];
+        if acc >= span {
+            break;
+        }
+    }
+    unit_or([head[0] - from[0], head[1] - from[1]], [1.0, 0.0])
+}
+
+/// The median of `values` under `cmp` (the upper one of an even count), reordering
+/// them; `None` when empty. Use `f32::total_cmp` for floats.
+pub fn median<T: Copy>(
+    values: &mut [T],
+    mut cmp: impl FnMut(&T, &T) -> std::cmp::Ordering,
+) -> Option<T> {
+    if values.is_empty() {
+        return None;
+    }
+    let mid = values.len() / 2;
+    Some(*values.select_nth_unstable_by(mid, &mut cmp).1)
+}
+
+/// Where a ray from `from` along the unit `dir` leaves a `width` x `height` image (the
+/// last pixel centre on each side), if that is within `max_px` and more than half a
+/// pixel away.
+pub fn border_exit(
+    from: [f32; 2],
+    dir: [f32; 2],
+    width: usize,
+    height: usize,
+    max_px: f32,
+) -> Option<[f32; 2]> {
+    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
+    let mut t = f32::INFINITY;
+    if dir[0] > 1e-6 {
+        t = t.min((w - from[0]) / dir[0]);
+    } else if dir[0] < -1e-6 {
+        t = t.min(-from[0] / dir[0]);
+    }
+    if dir[1] > 1e-6 {
+        t = t.min((h - from[1]) / dir[1]);
+    } else if dir[1] < -1e-6 {
+        t = t.min(-from[1] / dir[1]);
+    }
+    (t.is_finite() && t > 0.5 && t <= max_px).then(|| [from[0] + t * dir[0], from[1] + t * dir[1]])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heading_uses_the_span() {
+        let pts = [[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [20.0, 5.0]];
+        let h = heading(&pts, 5.0);
+        assert!((h[0] - 0.0).abs() < 1e-6 && (h[1] - 1.0).abs() < 1e-6);
+        let h = heading(&pts, 12.0);
+        assert!((h[0] - 0.894).abs() < 1e-3 && (h[1] - 0.447).abs() < 1e-3);
+        assert_eq!(heading(&[], 3.0), [1.0, 0.0]);
+    }
+
+    #[test]
+    fn medians_and_exits() {
+        assert_eq!(median(&mut [3.0f32, 1.0, 2.0], f32::total_cmp), Some(2.0));
+        assert_eq!(median(&mut [4u8, 1, 3, 2], u8::cmp), Some(3));
+        assert_eq!(median(&mut [] as &mut [f32], f32::total_cmp), None);
+        assert_eq!(
+            border_exit([5.0, 5.0], [1.0, 0.0], 10, 10, 100.0),
+            Some([9.0, 5.0])
+        );
+        assert_eq!(border_exit([5.0, 5.0], [1.0, 0.0], 10, 10, 2.0), None);
+        assert!((polyline_length(&[[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]]) - 6.0).abs() < 1e-6);
+    }
+}

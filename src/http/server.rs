@@ -1,0 +1,163 @@
+//! Running the service: warm-up, serving until a signal, graceful shutdown, logging.
+
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use tokio::net::TcpListener;
+
+use super::config::{LogFormat, Presets, ServeConfig};
+use super::error::ApiError;
+use super::router::app;
+use super::state::AppState;
+use crate::detect::OnnxDetector;
+
+/// Runs one small segmentation on the pool so that the first real request does not pay
+/// for lazy initialisation, then marks the service ready. (The detector has already run
+/// once per session when it was loaded.)
+pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
+    let spec = crate::synth::SceneSpec {
+        width: 160,
+        height: 120,
+        cables: 2,
+        cable_width: 8.0,
+        background: crate::synth::Background::Plain,
+        seed: 1,
+    };
+    let params = state.presets.get("default").cloned().unwrap_or_default();
+    let job = state
+        .pool
+        .try_submit(move || {
+            let scene = crate::synth::scene(&spec);
+            crate::engine::segment(&scene.image, &scene.ends(), &params).map(|s| s.cables.len())
+        })
+        .map_err(|_| ApiError::Internal("pool full during warm-up".into()))?;
+    let started = job
+        .await
+        .map_err(|_| ApiError::Internal("warm-up job dropped".into()))?
+        .map_err(|p| ApiError::Internal(format!("warm-up panicked: {}", p.0)))?;
+    started.value?;
+    state.ready.store(true, Ordering::SeqCst);
+    Ok(())
+}
+
+/// Serves `state` on `listener` until `shutdown` resolves; then turns not-ready, waits
+/// `shutdown_delay_s`, stops accepting and gives in-flight requests
+/// `shutdown_grace_s` to finish.
+pub async fn serve(
+    listener: TcpListener,
+    state: AppState,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    let delay = Duration::from_secs(state.config.shutdown_delay_s);
+    let grace = Duration::from_secs(state.config.shutdown_grace_s);
+    let (signalled_tx, mut signalled_rx) = tokio::sync::watch::channel(false);
+    let drain_state = state.clone();
+    let stop = async move {
+        shutdown.await;
+        drain_state.draining.store(true, Ordering::SeqCst);
+        tracing::info!(
+            delay_s = delay.as_secs(),
+            "shutdown requested: not ready, draining"
+        );
+        tokio::time::sleep(delay).await;
+        let _ = signalled_tx.send(true);
+    };
+    let server = axum::serve(listener, app(state)).with_graceful_shutdown(stop);
+    let grace_timer = async move {
+        while !*signalled_rx.borrow() {
+            if signalled_rx.changed().await.is_err() {
+                std::future::pending::<()>().await;
+            }
+        }
+        tokio::time::sleep(grace).await;
+    };
+    tokio::select! {
+        result = server => result,
+        () = grace_timer => {
+            tracing::warn!(grace_s = grace.as_secs(), "grace period over; exiting with requests in flight");
+            Ok(())
+        }
+    }
+}
+
+/// Resolves on SIGTERM or SIGINT.
+pub async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = term => {},
+    }
+}
+
+/// Installs the log subscriber (`RUST_LOG` filters, default `info`).
+pub fn init_logging(format: LogFormat) {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let builder = tracing_subscriber::fmt().with_env_filter(filter);
+    let _ = match format {
+        LogFormat::Text => builder.try_init(),
+        LogFormat::Json => builder
+            .json()
+            .flatten_event(true)
+            .with_current_span(true)
+            .try_init(),
+    };
+}
+
+/// `ariadne serve`: load presets and the detector (a bad model stops it here), start
+/// the pool, bind, warm up, serve until a signal.
+pub fn run(config: ServeConfig) -> Result<(), String> {
+    init_logging(config.log_format);
+    let presets = Presets::load(config.presets.as_deref()).map_err(|e| e.to_string())?;
+    let detector = OnnxDetector::load(&config.detector, config.worker_count())
+        .map_err(|e| format!("endpoint detector: {e}"))?;
+    tracing::info!(model = %config.detector.model.display(), ?detector, "endpoint detector loaded");
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
+    let grace = Duration::from_secs(config.shutdown_grace_s);
+    let state = runtime.block_on(async move {
+        let state = AppState::new(config.clone(), presets, Arc::new(detector))
+            .map_err(|e| format!("cannot start workers: {e}"))?;
+        let listener = TcpListener::bind(config.bind)
+            .await
+            .map_err(|e| format!("cannot listen on {}: {e}", config.bind))?;
+        tracing::info!(
+            bind = %config.bind,
+            workers = state.pool.workers(),
+            queue = state.pool.queue_capacity(),
+            "listening"
+        );
+        let warm = state.clone();
+        tokio::spawn(async move {
+            match warm_up(&warm).await {
+                Ok(()) => tracing::info!("warmed up: ready"),
+                Err(e) => tracing::error!(error = %e, "warm-up failed: staying not ready"),
+            }
+        });
+        serve(listener, state.clone(), shutdown_signal())
+            .await
+            .map_err(|e| format!("server error: {e}"))?;
+        Ok::<_, String>(state)
+    })?;
+    if !state.pool.wait_idle(grace) {
+        tracing::warn!("grace period over with worker jobs still running");
+    }
+    tracing::info!("stopped");
+    Ok(())
+}

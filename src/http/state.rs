@@ -1,0 +1,57 @@
+//! What every handler shares: settings, presets, the pool, the detector and the
+//! life-cycle flags.
+
+use std::ops::Deref;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use super::config::{Presets, ServeConfig};
+use super::pool::WorkerPool;
+use crate::detect::EndpointDetector;
+
+/// Shared state of the service: configuration, presets, the pool and the life-cycle
+/// flags. Cheap to clone.
+#[derive(Clone)]
+pub struct AppState(Arc<Inner>);
+
+/// What [`AppState`] holds.
+pub struct Inner {
+    /// Settings.
+    pub config: ServeConfig,
+    /// Named parameter sets.
+    pub presets: Presets,
+    /// Where CPU work runs.
+    pub pool: WorkerPool,
+    /// Finds ends when a request gives none.
+    pub detector: Arc<dyn EndpointDetector>,
+    /// True once warmed up.
+    pub ready: AtomicBool,
+    /// True once shutdown has begun.
+    pub draining: AtomicBool,
+}
+
+impl Deref for AppState {
+    type Target = Inner;
+    fn deref(&self) -> &Inner {
+        &self.0
+    }
+}
+
+impl AppState {
+    /// State for `config`: presets loaded, pool started, not yet ready.
+    pub fn new(
+        config: ServeConfig,
+        presets: Presets,
+        detector: Arc<dyn EndpointDetector>,
+    ) -> std::io::Result<Self> {
+        let pool = WorkerPool::new(config.worker_count(), config.queue)?;
+        Ok(Self(Arc::new(Inner {
+            config,
+            presets,
+            pool,
+            detector,
+            ready: AtomicBool::new(false),
+            draining: AtomicBool::new(false),
+        })))
+    }
+}

@@ -1,0 +1,203 @@
+//! One segmentation request from bytes to masks, the same for the service, the command
+//! line, the evaluator and the benchmarks: decode → ends (given or detected) → engine →
+//! masks → PNG, timed stage by stage in one [`Timings`].
+
+use std::time::Instant;
+
+use image::{ExtendedColorType, ImageEncoder, RgbImage, codecs::png};
+use thiserror::Error;
+
+use crate::decode::{self, DecodeError};
+use crate::detect::{DetectError, EndpointDetector, Ends};
+use crate::engine::{self, EngineError, Mask, MaskKind, Params, Segmentation, render};
+use crate::timings::{Timings, ms_since as ms};
+
+/// Where the cable ends come from.
+#[derive(Clone, Copy)]
+pub enum EndsSource<'a> {
+    /// Given by the caller (confidence 1); the detector is not run.
+    Given(&'a [[f64; 2]]),
+    /// Found in the photo by this detector.
+    Detect(&'a dyn EndpointDetector),
+}
+
+/// What to do with one photo.
+#[derive(Clone, Copy)]
+pub struct Job<'a> {
+    /// The JPEG or PNG file.
+    pub bytes: &'a [u8],
+    /// The source of the cable ends.
+    pub ends: EndsSource<'a>,
+    /// Engine parameters.
+    pub params: &'a Params,
+    /// Largest accepted pixel count, checked from the header before decoding.
+    pub max_pixels: u64,
+    /// Which mask to draw.
+    pub mask: MaskKind,
+    /// Also draw the photo with the cables on it.
+    pub overlay: bool,
+    /// Encode the mask (and overlay) as PNG; the evaluator reads the mask directly.
+    pub encode: bool,
+}
+
+/// What one photo gave.
+#[derive(Debug, Clone)]
+pub struct Output {
+    /// The cables.
+    pub segmentation: Segmentation,
+    /// The ends used, with their confidences.
+    pub ends: Ends,
+    /// The mask of the asked kind.
+    pub mask: Mask,
+    /// The mask as PNG, when encoding was asked for.
+    pub mask_png: Option<Vec<u8>>,
+    /// The overlay as PNG, when asked for and encoding was asked for.
+    pub overlay_png: Option<Vec<u8>>,
+    /// Every stage; `total` is the pipeline's own time, `queue` is 0.
+    pub timings: Timings,
+}
+
+/// Why a photo could not be segmented.
+#[derive(Debug, Error)]
+pub enum PipelineError {
+    /// The bytes are not a usable image.
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+    /// The detector failed.
+    #[error("endpoint detector: {0}")]
+    Detect(#[from] DetectError),
+    /// The engine refused the input.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// PNG encoding failed.
+    #[error("PNG encoding failed: {0}")]
+    Encode(String),
+}
+
+/// Runs `job` (see the module docs).
+pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
+    let started = Instant::now();
+    let t = Instant::now();
+    let image = decode::decode_rgb(job.bytes, job.max_pixels)?;
+    let decode_ms = ms(t);
+    let ends = match job.ends {
+        EndsSource::Given(points) => Ends::given(points.to_vec()),
+        EndsSource::Detect(detector) => Ends::detected(detector, &image)?,
+    };
+    let segmentation =
+        engine::segment_with_confidence(&image, &ends.points, &ends.confidences, job.params)?;
+    let t = Instant::now();
+    let mask = render::render_mask(&segmentation, job.mask, job.params.mask_width_px);
+    let overlay = job.overlay.then(|| render::overlay(&image, &segmentation));
+    let mask_ms = ms(t);
+    let t = Instant::now();
+    let (mask_png, overlay_png) = if job.encode {
+        (
+            Some(mask_png(&mask)?),
+            overlay.as_ref().map(rgb_png).transpose()?,
+        )
+    } else {
+        (None, None)
+    };
+    let encode_ms = ms(t);
+    let timings = Timings {
+        decode: decode_ms,
+        endpoints: ends.detect_ms,
+        mask: mask_ms,
+        encode: encode_ms,
+        total: ms(started),
+        ..segmentation.timings
+    };
+    Ok(Output {
+        segmentation,
+        ends,
+        mask,
+        mask_png,
+        overlay_png,
+        timings,
+    })
+}
+
+/// Encodes a mask as PNG.
+pub fn mask_png(mask: &Mask) -> Result<Vec<u8>, PipelineError> {
+    match mask {
+        Mask::Gray(img) => png_bytes(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            ExtendedColorType::L8,
+        ),
+        Mask::Rgb(img) => rgb_png(img),
+    }
+}
+
+/// Encodes an RGB picture as PNG.
+pub fn rgb_png(img: &RgbImage) -> Result<Vec<u8>, PipelineError> {
+    png_bytes(
+        img.as_raw(),
+        img.width(),
+        img.height(),
+        ExtendedColorType::Rgb8,
+    )
+}
+
+/// Raw 8-bit pixels as PNG, with fast compression (masks compress well anyway).
+fn png_bytes(
+    raw: &[u8],
+    width: u32,
+    height: u32,
+    kind: ExtendedColorType,
+) -> Result<Vec<u8>, PipelineError> {
+    let mut out = Vec::new();
+    png::PngEncoder::new_with_quality(&mut out, png::CompressionType::Fast, png::FilterType::Sub)
+        .write_image(raw, width, height, kind)
+        .map_err(|e| PipelineError::Encode(e.to_string()))?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_png_that_cannot_be_written_is_an_error_not_an_empty_mask() {
+        // A zero-sized picture: the PNG encoder refuses it.
+        let err = png_bytes(&[], 0, 0, ExtendedColorType::L8).unwrap_err();
+        assert!(matches!(err, PipelineError::Encode(_)), "{err}");
+    }
+
+    #[test]
+    fn given_ends_run_every_stage_but_detection() {
+        let scene = crate::synth::scene(&crate::synth::SceneSpec {
+            width: 320,
+            height: 240,
+            cables: 2,
+            cable_width: 8.0,
+            background: crate::synth::Background::Plain,
+            seed: 3,
+        });
+        let bytes = rgb_png(&scene.image).unwrap();
+        let ends = scene.ends();
+        let params = Params::default();
+        let out = run(&Job {
+            bytes: &bytes,
+            ends: EndsSource::Given(&ends),
+            params: &params,
+            max_pixels: u64::MAX,
+            mask: MaskKind::Labels,
+            overlay: true,
+            encode: true,
+        })
+        .unwrap();
+        // The same cables as the engine on the decoded photo (PNG is lossless).
+        let direct = engine::segment(&scene.image, &ends, &params).unwrap();
+        assert_eq!(out.segmentation.cables, direct.cables);
+        assert!(!direct.cables.is_empty());
+        assert_eq!(out.ends.confidences, vec![1.0; ends.len()]);
+        assert!(out.mask_png.is_some() && out.overlay_png.is_some());
+        let t = out.timings;
+        assert_eq!((t.endpoints, t.queue), (0.0, 0.0));
+        assert!(t.decode > 0.0 && t.superpixels > 0.0 && t.encode > 0.0);
+        assert!(t.total >= t.decode + t.superpixels + t.mask + t.encode);
+    }
+}
