@@ -1,5 +1,5 @@
 # The two commands: `make run` serves on the bundled defaults; `make test` runs everything.
-.PHONY: setup run test lint bench eval eval-detect openapi deploy-check
+.PHONY: setup run test lint bench eval eval-detect lobo train-field openapi deploy-check
 
 # ONNX Runtime's shared library, from the PyPI wheel, into .ort/ (idempotent).
 setup:
@@ -19,11 +19,25 @@ lint:
 bench: setup
 	cargo bench
 
-eval:
+eval: setup
 	cargo run --release -- eval
 
 eval-detect: setup
 	cargo run --release -- eval --endpoints detect
+
+# Leave-one-background-out: train one network per held-out group (out/field-GROUP.onnx,
+# about 15 minutes each on 2 cores), then score each on its held-out photos.
+lobo: setup
+	for g in white wood blue hard; do \
+	  training/.venv/bin/python training/train_field.py --holdout $$g --steps 2000 --out out/field-$$g.onnx; \
+	done
+	cargo build --release
+	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints detect
+	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints gt
+
+# The bundled model (about 20 minutes on 2 cores); see models/README.md.
+train-field:
+	training/.venv/bin/python training/train_field.py --steps 3000 --out models/cable_field.onnx
 
 # hadolint, kubernetes-validate --strict, kubectl kustomize (offline checks).
 deploy-check:

@@ -11,7 +11,7 @@ use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
 use ariadne_dlo::engine::{self, MaskKind, Params, render};
-use ariadne_dlo::pipeline::{self, EndsSource};
+use ariadne_dlo::pipeline;
 use ariadne_dlo::{decode, eval};
 
 fn main() {
@@ -40,10 +40,10 @@ fn fixtures() -> Vec<Fixture> {
         .collect()
 }
 
-/// Endpoint detection with the bundled model, ONNX Runtime on one thread: resize,
-/// inference, decoding. Needs `make setup`.
+/// The bundled cable-field network, ONNX Runtime on one thread: resize, inference,
+/// decoding of the terminals and the field. Needs `make setup`.
 #[divan::bench(sample_count = 50)]
-fn detect_endpoints_640x480(bencher: divan::Bencher) {
+fn cable_field_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     let detector = single_thread_detector();
     let mut i = 0;
@@ -53,14 +53,15 @@ fn detect_endpoints_640x480(bencher: divan::Bencher) {
     });
 }
 
-/// The service's path for a photo alone: decode → detect ends → engine → mask PNG.
+/// The service's path for a photo alone: decode → network (ends and field) → engine →
+/// mask PNG.
 #[divan::bench(sample_count = 30)]
 fn segment_with_detection_640x480(bencher: divan::Bencher) {
     let detector = single_thread_detector();
     bench_segment(bencher, Some(&detector));
 }
 
-/// Decode → engine → binary mask → PNG, as `ariadne segment` and the service do.
+/// Decode → engine (true ends, no field) → binary mask → PNG.
 #[divan::bench(sample_count = 30)]
 fn segment_640x480(bencher: divan::Bencher) {
     bench_segment(bencher, None);
@@ -77,10 +78,12 @@ fn bench_segment(bencher: divan::Bencher, detector: Option<&dyn EndpointDetector
         i += 1;
         pipeline::run(&pipeline::Job {
             bytes: &f.jpeg,
-            ends: match detector {
-                Some(d) => EndsSource::Detect(d),
-                None => EndsSource::Given(&f.ends),
+            ends: if detector.is_some() {
+                None
+            } else {
+                Some(&f.ends)
             },
+            network: detector,
             params: &p,
             max_pixels: u64::MAX,
             mask: MaskKind::Binary,

@@ -1,6 +1,9 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
-//! line, the evaluator and the benchmarks: decode → ends (given or detected) → engine →
-//! masks → PNG, timed stage by stage in one [`Timings`].
+//! line, the evaluator and the benchmarks: decode → network (ends and cable field) →
+//! engine → masks → PNG, timed stage by stage in one [`Timings`].
+//!
+//! The network runs whenever there is one, also when the caller gives the ends: then
+//! its ends are ignored but its cable field still guides the walks.
 
 use std::time::Instant;
 
@@ -12,22 +15,15 @@ use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{self, EngineError, Mask, MaskKind, Params, Segmentation, render};
 use crate::timings::{Timings, ms_since as ms};
 
-/// Where the cable ends come from.
-#[derive(Clone, Copy)]
-pub enum EndsSource<'a> {
-    /// Given by the caller (confidence 1); the detector is not run.
-    Given(&'a [[f64; 2]]),
-    /// Found in the photo by this detector.
-    Detect(&'a dyn EndpointDetector),
-}
-
 /// What to do with one photo.
 #[derive(Clone, Copy)]
 pub struct Job<'a> {
     /// The JPEG or PNG file.
     pub bytes: &'a [u8],
-    /// The source of the cable ends.
-    pub ends: EndsSource<'a>,
+    /// The caller's cable ends (confidence 1); `None` takes the network's.
+    pub ends: Option<&'a [[f64; 2]]>,
+    /// The network: cable ends and, for a cable-field model, the field.
+    pub network: Option<&'a dyn EndpointDetector>,
     /// Engine parameters.
     pub params: &'a Params,
     /// Largest accepted pixel count, checked from the header before decoding.
@@ -40,6 +36,9 @@ pub struct Job<'a> {
     pub encode: bool,
 }
 
+/// A job without ends needs a network.
+const NO_ENDS: &str = "no cable ends were given and no network is loaded to find them";
+
 /// What one photo gave.
 #[derive(Debug, Clone)]
 pub struct Output {
@@ -47,6 +46,8 @@ pub struct Output {
     pub segmentation: Segmentation,
     /// The ends used, with their confidences.
     pub ends: Ends,
+    /// Whether the network ran.
+    pub network_ran: bool,
     /// The mask of the asked kind.
     pub mask: Mask,
     /// The mask as PNG, when encoding was asked for.
@@ -72,6 +73,9 @@ pub enum PipelineError {
     /// PNG encoding failed.
     #[error("PNG encoding failed: {0}")]
     Encode(String),
+    /// Neither ends nor a network to find them.
+    #[error("{0}")]
+    NoEnds(&'static str),
 }
 
 /// Runs `job` (see the module docs).
@@ -80,12 +84,22 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     let t = Instant::now();
     let image = decode::decode_rgb(job.bytes, job.max_pixels)?;
     let decode_ms = ms(t);
-    let ends = match job.ends {
-        EndsSource::Given(points) => Ends::given(points.to_vec()),
-        EndsSource::Detect(detector) => Ends::detected(detector, &image)?,
+    let t = Instant::now();
+    let seen = job.network.map(|n| n.detect(&image)).transpose()?;
+    let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
+    let ends = match (job.ends, &seen) {
+        (Some(points), _) => Ends::given(points),
+        (None, Some(seen)) => Ends::detected(&seen.ends),
+        (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
     };
-    let segmentation =
-        engine::segment_with_confidence(&image, &ends.points, &ends.confidences, job.params)?;
+    let field = seen.as_ref().and_then(|s| s.field.as_ref());
+    let segmentation = engine::segment_with_confidence(
+        &image,
+        &ends.points,
+        &ends.confidences,
+        field,
+        job.params,
+    )?;
     let t = Instant::now();
     let mask = render::render_mask(&segmentation, job.mask, job.params.mask_width_px);
     let overlay = job.overlay.then(|| render::overlay(&image, &segmentation));
@@ -102,13 +116,14 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     let encode_ms = ms(t);
     let timings = Timings {
         decode: decode_ms,
-        endpoints: ends.detect_ms,
+        endpoints: network_ms,
         mask: mask_ms,
         encode: encode_ms,
         total: ms(started),
         ..segmentation.timings
     };
     Ok(Output {
+        network_ran: seen.is_some(),
         segmentation,
         ends,
         mask,
@@ -181,7 +196,8 @@ mod tests {
         let params = Params::default();
         let out = run(&Job {
             bytes: &bytes,
-            ends: EndsSource::Given(&ends),
+            ends: Some(&ends),
+            network: None,
             params: &params,
             max_pixels: u64::MAX,
             mask: MaskKind::Labels,

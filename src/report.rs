@@ -48,7 +48,11 @@ pub struct CableReport {
     pub width_px: f32,
     /// Median colour along the centreline, `#rrggbb`.
     pub color: String,
-    /// Confidence in 0..=1.
+    /// Confidence in 0..=1: how well the walk that found the cable kept to one thin
+    /// structure of one colour (colour agreement, smoothness, lateral contrast, mean
+    /// cable probability), discounted when no walk from the other end confirmed it and
+    /// by the confidence of an unconfirmed start end, and multiplied by the share of
+    /// the centreline that the cable field calls cable.
     pub score: f32,
 }
 
@@ -68,7 +72,8 @@ pub struct SplineReport {
 pub struct EndpointReport {
     /// Position `[x, y]`, pixels.
     pub point: [f64; 2],
-    /// Detector confidence in 0..=1 (1 for ends given by the caller).
+    /// The network's terminal confidence in 0..=1 (the cable field's terminal heatmap
+    /// at its peak; 1 for ends given by the caller).
     pub confidence: f32,
     /// Id of the cable it ends, or null when no cable was found from it.
     pub cable: Option<usize>,

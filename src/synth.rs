@@ -106,6 +106,16 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The ends of the cables that lie inside the frame (more than 12 px from the
+    /// border): the terminals a photo shows.
+    pub fn terminals(&self) -> Vec<[f64; 2]> {
+        let (w, h) = (self.image.width() as f64, self.image.height() as f64);
+        self.ends()
+            .into_iter()
+            .filter(|p| p[0] > 12.0 && p[1] > 12.0 && p[0] < w - 13.0 && p[1] < h - 13.0)
+            .collect()
+    }
+
     /// Both ends of every cable, in cable order.
     pub fn ends(&self) -> Vec<[f64; 2]> {
         self.cables
@@ -223,6 +233,132 @@ fn random_curve(rng: &mut Rng, w: f32, h: f32) -> Vec<[f32; 2]> {
         }
     }
     unreachable!("the attempt loop only ends by returning")
+}
+
+/// The hard cases the cable field is for, each one 640x480 photo.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Case {
+    /// A black cable on dark grey paper (little colour contrast).
+    DarkOnDark,
+    /// Two cables of the same colour running side by side, two cable widths apart.
+    SideBySide,
+    /// A cable crossing the frame from border to border (no end in view), and one
+    /// with both ends in view.
+    NoEndInView,
+    /// A cable that crosses itself in a loop.
+    Loop,
+}
+
+impl Case {
+    /// Every case.
+    pub const ALL: [Case; 4] = [
+        Case::DarkOnDark,
+        Case::SideBySide,
+        Case::NoEndInView,
+        Case::Loop,
+    ];
+}
+
+/// A cable to draw: centreline and colour.
+type Drawn = (Vec<[f32; 2]>, [u8; 3]);
+
+/// Width of the cables of [`case`] scenes, pixels.
+const CASE_WIDTH: f32 = 11.0;
+
+/// A [`Case`] scene: shaded cables (a darker rim, a lighter core) with crimped metal
+/// terminals beyond every end inside the frame, on a noisy plain background.
+pub fn case(case: Case) -> Scene {
+    let (w, h) = (640u32, 480u32);
+    let line = |f: &dyn Fn(f32) -> [f32; 2], n: usize| -> Vec<[f32; 2]> {
+        (0..=n).map(|i| f(i as f32 / n as f32)).collect()
+    };
+    let arc = |x0: f32, y0: f32, x1: f32, y1: f32, bend: f32| {
+        move |t: f32| {
+            let (nx, ny) = (-(y1 - y0), x1 - x0);
+            let b = bend * 4.0 * t * (1.0 - t);
+            [x0 + (x1 - x0) * t + nx * b, y0 + (y1 - y0) * t + ny * b]
+        }
+    };
+    let (background, cables): ([u8; 3], Vec<Drawn>) = match case {
+        Case::DarkOnDark => (
+            [58, 54, 52],
+            vec![(
+                line(&arc(120.0, 380.0, 520.0, 120.0, 0.25), 600),
+                [14, 14, 16],
+            )],
+        ),
+        Case::SideBySide => {
+            let a = line(&arc(90.0, 300.0, 560.0, 260.0, 0.2), 600);
+            let b = a.iter().map(|p| [p[0], p[1] + 3.0 * CASE_WIDTH]).collect();
+            (
+                [225, 222, 215],
+                vec![(a, [200, 40, 35]), (b, [200, 40, 35])],
+            )
+        }
+        Case::NoEndInView => (
+            [222, 226, 230],
+            vec![
+                (
+                    line(&arc(0.0, 150.0, 639.0, 330.0, 0.1), 800),
+                    [30, 70, 190],
+                ),
+                (
+                    line(&arc(150.0, 420.0, 480.0, 400.0, -0.3), 500),
+                    [30, 150, 60],
+                ),
+            ],
+        ),
+        Case::Loop => {
+            // A prolate cycloid: one loop where the cable crosses itself.
+            let f = |t: f32| {
+                let u = -1.2 + t * (std::f32::consts::TAU + 2.4);
+                [140.0 + 32.0 * u - 90.0 * u.sin(), 250.0 - 90.0 * u.cos()]
+            };
+            ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
+        }
+    };
+    let mut rng = Rng::new(case as u64 + 1);
+    let mut image = RgbImage::from_fn(w, h, |_, _| {
+        let n = rng.range(-5.0, 5.0);
+        Rgb(background.map(|c| (c as f32 + n).clamp(0.0, 255.0) as u8))
+    });
+    let mut mask = GrayImage::new(w, h);
+    let mut out = Vec::new();
+    for (centreline, color) in cables {
+        let rim = color.map(|c| (c as f32 * 0.55) as u8);
+        let core = color.map(|c| (c as f32 * 1.25 + 25.0).min(255.0) as u8);
+        for (width, colour) in [(CASE_WIDTH, rim), (CASE_WIDTH - 3.0, color), (3.0, core)] {
+            stroke(&centreline, width, w, h, |x, y| {
+                image.put_pixel(x, y, Rgb(colour))
+            });
+        }
+        stroke(&centreline, CASE_WIDTH, w, h, |x, y| {
+            mask.put_pixel(x, y, Luma([255]))
+        });
+        for (end, before) in [
+            (centreline[0], centreline[8]),
+            (
+                centreline[centreline.len() - 1],
+                centreline[centreline.len() - 9],
+            ),
+        ] {
+            let inside = end[0] > 12.0 && end[1] > 12.0 && end[0] < 627.0 && end[1] < 467.0;
+            if inside {
+                let d = [end[0] - before[0], end[1] - before[1]];
+                let n = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-3);
+                let tip = [end[0] + d[0] / n * 14.0, end[1] + d[1] / n * 14.0];
+                stroke(&[end, tip], CASE_WIDTH - 4.0, w, h, |x, y| {
+                    image.put_pixel(x, y, Rgb([175, 170, 160]))
+                });
+            }
+        }
+        out.push(SynthCable { centreline, color });
+    }
+    Scene {
+        image,
+        cables: out,
+        mask,
+    }
 }
 
 #[cfg(test)]

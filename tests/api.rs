@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
-use ariadne_dlo::detect::{DetectError, Detection, EndpointDetector};
+use ariadne_dlo::detect::{DetectError, Detection, EndpointDetector, Perception};
 use ariadne_dlo::http::{self, ServeConfig};
 use ariadne_dlo::synth::{self, Background, SceneSpec};
 use common::app::{TestApp, metric_value};
@@ -35,15 +35,16 @@ fn scene() -> &'static synth::Scene {
 struct FakeDetector;
 
 impl EndpointDetector for FakeDetector {
-    fn detect(&self, _image: &image::RgbImage) -> Result<Vec<Detection>, DetectError> {
-        Ok(scene()
+    fn detect(&self, _image: &image::RgbImage) -> Result<Perception, DetectError> {
+        let ends = scene()
             .ends()
             .into_iter()
             .map(|point| Detection {
                 point,
                 confidence: 0.9,
             })
-            .collect())
+            .collect();
+        Ok(Perception { ends, field: None })
     }
 }
 

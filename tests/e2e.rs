@@ -1,6 +1,6 @@
-//! End to end with the real parts: the bundled model through ONNX Runtime behind the
-//! real server, on a photo of the development split (needs `make setup` and the
-//! dataset).
+//! End to end with the real parts: the bundled model through ONNX Runtime, behind the
+//! real server on a photo of the development split, and on the synthetic hard cases
+//! (needs `make setup` and the dataset).
 
 #![allow(clippy::unwrap_used)] // test code: a failure should panic
 
@@ -9,8 +9,11 @@ mod common;
 use std::sync::Arc;
 
 use ariadne_dlo::detect::{DetectorConfig, OnnxDetector};
-use ariadne_dlo::eval;
+use ariadne_dlo::engine::{MaskKind, Params, render};
+use ariadne_dlo::synth::{self, Case};
+use ariadne_dlo::{eval, pipeline};
 use common::app::TestApp;
+use image::{GrayImage, Luma};
 
 /// No ends in the request: the bundled detector finds the terminals of a real photo,
 /// and the cables are found from them.
@@ -51,4 +54,57 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
         app.endpoint_inferences().await >= 1.0,
         "endpoint inference time is recorded"
     );
+}
+
+/// The cases the cable field is for, from a photo alone (the network's ends and field):
+/// a dark cable on a dark background, two same-colour cables side by side, a cable with
+/// no end in view, a self-crossing loop. Each true cable must be found (per-cable IoU
+/// ≥ 0.5 of the 7 px strokes), and nothing else.
+#[test]
+fn hard_synthetic_cases_are_found_from_a_photo_alone() {
+    let network = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
+    let params = Params::default();
+    for case in Case::ALL {
+        let scene = synth::case(case);
+        let png = pipeline::rgb_png(&scene.image).unwrap();
+        let out = pipeline::run(&pipeline::Job {
+            bytes: &png,
+            ends: None,
+            network: Some(&network),
+            params: &params,
+            max_pixels: u64::MAX,
+            mask: MaskKind::Binary,
+            overlay: false,
+            encode: false,
+        })
+        .unwrap();
+        let (w, h) = scene.image.dimensions();
+        let found: Vec<GrayImage> = out
+            .segmentation
+            .cables
+            .iter()
+            .map(|c| render::cable_mask(c, w, h, params.mask_width_px))
+            .collect();
+        let truth: Vec<GrayImage> = scene
+            .cables
+            .iter()
+            .map(|c| {
+                let mut m = GrayImage::new(w, h);
+                render::stroke(&c.centreline, params.mask_width_px, w, h, |x, y| {
+                    m.put_pixel(x, y, Luma([255]))
+                });
+                m
+            })
+            .collect();
+        let (matched, _) = eval::match_cables(&found, &truth, eval::MATCH_IOU);
+        eprintln!(
+            "{case:?}: {} found, {matched} of {} matched, ends {:?}",
+            found.len(),
+            truth.len(),
+            out.ends.points
+        );
+        assert_eq!(matched, truth.len(), "{case:?}: a true cable was missed");
+        assert_eq!(found.len(), truth.len(), "{case:?}: extra cables");
+    }
 }

@@ -38,9 +38,10 @@ pub struct DetectorArgs {
     /// ONNX model of cable ends.
     #[arg(long, env = "ARIADNE_MODEL", default_value_os_t = DetectorConfig::default().model)]
     pub model: PathBuf,
-    /// Output convention of the model: heatmap (the bundled model) or yolo
-    /// (ultralytics `[1, 4+classes, N]`; box centres become ends).
-    #[arg(long, env = "ARIADNE_MODEL_KIND", default_value = "heatmap")]
+    /// Output convention of the model: field (the bundled cable-field model: ends and
+    /// cable field), heatmap (ends only) or yolo (ultralytics `[1, 4+classes, N]`; box
+    /// centres become ends).
+    #[arg(long, env = "ARIADNE_MODEL_KIND", default_value = "field")]
     pub model_kind: ModelKind,
     /// Network input width; the photo is resized to fit, keeping its aspect ratio.
     #[arg(long, env = "ARIADNE_MODEL_INPUT_WIDTH", default_value_t = DetectorConfig::default().model_input_width)]

@@ -1,8 +1,8 @@
 //! `ariadne segment` and `ariadne eval`.
 
-use crate::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
-use crate::eval::{self, ImageResult};
-use crate::pipeline::{self, EndsSource};
+use crate::detect::{DetectorConfig, OnnxDetector};
+use crate::eval::{self, EndsFrom, ImageResult};
+use crate::pipeline;
 use crate::report::{self, SegmentResponse};
 
 use super::args::{EndsArg, EvalArgs, SegmentArgs};
@@ -16,18 +16,12 @@ pub fn segment(args: SegmentArgs) -> Result<(), CliError> {
         None => None,
     };
     let bytes = std::fs::read(&args.image).map_err(|e| CliError::Io(args.image.clone(), e))?;
-    let detector = match given {
-        Some(_) => None,
-        None => Some(OnnxDetector::load(&DetectorConfig::from(args.detector), 1)?),
-    };
-    let ends = match (&given, &detector) {
-        (Some(points), _) => EndsSource::Given(points),
-        (None, Some(d)) => EndsSource::Detect(d),
-        (None, None) => unreachable!("a detector is loaded when no ends are given"),
-    };
+    // The network runs even with given ends: its cable field guides the walks.
+    let network = OnnxDetector::load(&DetectorConfig::from(args.detector), 1)?;
     let out = pipeline::run(&pipeline::Job {
         bytes: &bytes,
-        ends,
+        ends: given.as_deref(),
+        network: Some(&network),
         params: &params,
         max_pixels: u64::MAX,
         mask: args.mask_kind.into(),
@@ -66,12 +60,11 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
     let samples = eval::load_dataset(&dir)?;
     let simple = params_from(&args.preset, args.options.as_deref())?;
     let hard = params_from(&args.hard_preset, args.options.as_deref())?;
-    let loaded = match args.endpoints {
-        EndsArg::Gt => None,
-        EndsArg::Detect => Some(OnnxDetector::load(
-            &DetectorConfig::from(args.detector.clone()),
-            1,
-        )?),
+    // The network runs with true ends too: its cable field guides the walks.
+    let network = OnnxDetector::load(&DetectorConfig::from(args.detector.clone()), 1)?;
+    let ends = match args.endpoints {
+        EndsArg::Gt => EndsFrom::Truth,
+        EndsArg::Detect => EndsFrom::Network,
     };
     let print = |r: &ImageResult| {
         if !args.json {
@@ -97,8 +90,7 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             );
         }
     };
-    let detector = loaded.as_ref().map(|d| d as &dyn EndpointDetector);
-    let results = eval::evaluate_all(&samples, &simple, &hard, detector, print)?;
+    let results = eval::evaluate_all(&samples, &simple, &hard, Some(&network), ends, print)?;
     let summaries = eval::summarise(&results);
     if args.json {
         let doc = serde_json::json!({ "dataset": dir, "images": results, "sets": summaries });

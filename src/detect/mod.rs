@@ -1,10 +1,13 @@
-//! Cable-end detection: a keypoint network run through ONNX Runtime finds the ends the
-//! engine's walks start from, so a photo alone is enough.
+//! Perception: a network run through ONNX Runtime finds the cable ends the engine's
+//! walks start from, so a photo alone is enough, and — the bundled cable-field model —
+//! the cable field (cable probability and direction per cell) that guides the walks.
 //!
-//! - [`output`]: decoding of heatmap and YOLO outputs (pure, tested on hand-made tensors);
+//! - [`output`]: decoding of field, heatmap and YOLO outputs (pure, tested on hand-made
+//!   tensors);
 //! - [`OnnxDetector`]: ONNX Runtime loaded from a shared library at start-up, one session
 //!   per worker.
 
+pub mod field;
 mod onnx;
 pub mod output;
 
@@ -12,6 +15,8 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use image::RgbImage;
+
+use crate::engine::CableField;
 
 pub use onnx::{OnnxDetector, default_runtime_candidates};
 
@@ -24,10 +29,19 @@ pub struct Detection {
     pub confidence: f32,
 }
 
-/// Finds cable ends in a photo.
+/// What a network saw in one photo.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Perception {
+    /// Cable ends, most confident first.
+    pub ends: Vec<Detection>,
+    /// The cable field, from models that predict one.
+    pub field: Option<CableField>,
+}
+
+/// Finds cable ends (and, with a cable-field model, the cable field) in a photo.
 pub trait EndpointDetector: Send + Sync {
-    /// The ends in `image`, most confident first.
-    fn detect(&self, image: &RgbImage) -> Result<Vec<Detection>, DetectError>;
+    /// What the network sees in `image`.
+    fn detect(&self, image: &RgbImage) -> Result<Perception, DetectError>;
 }
 
 /// Errors loading or running a detector.
@@ -58,7 +72,10 @@ pub enum DetectError {
 /// The output convention of a model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ModelKind {
-    /// Keypoint heatmap `[1, 1 or 3, H/s, W/s]` (the bundled model).
+    /// The cable field `[1, 6, H/s, W/s]` (the bundled model): cable probability,
+    /// terminal heatmap, terminal x/y offsets, cos 2θ, sin 2θ.
+    Field,
+    /// Keypoint heatmap `[1, 1 or 3, H/s, W/s]` (ends only).
     Heatmap,
     /// Ultralytics YOLO detections `[1, 4 + classes, N]`; box centres become ends.
     Yolo,
@@ -69,7 +86,11 @@ impl FromStr for ModelKind {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         crate::choice::parse(
             s,
-            &[("heatmap", Self::Heatmap), ("yolo", Self::Yolo)],
+            &[
+                ("field", Self::Field),
+                ("heatmap", Self::Heatmap),
+                ("yolo", Self::Yolo),
+            ],
             "model kind",
         )
     }
@@ -101,12 +122,12 @@ pub struct DetectorConfig {
 impl Default for DetectorConfig {
     fn default() -> Self {
         Self {
-            model: PathBuf::from("models/endpoints.onnx"),
-            model_kind: ModelKind::Heatmap,
+            model: PathBuf::from("models/cable_field.onnx"),
+            model_kind: ModelKind::Field,
             model_input_width: 320,
             model_input_height: 240,
             detect_threshold: 0.35,
-            detect_nms_px: 20.0,
+            detect_nms_px: 10.0,
             ort_threads: 1,
             ort_library: None,
         }
@@ -139,31 +160,22 @@ pub struct Ends {
     pub points: Vec<[f64; 2]>,
     /// Confidence of each (1 for ends given by the caller).
     pub confidences: Vec<f32>,
-    /// Milliseconds spent detecting them (0 when given).
-    pub detect_ms: f64,
 }
 
 impl Ends {
     /// Ends given by the caller.
-    pub fn given(points: Vec<[f64; 2]>) -> Self {
+    pub fn given(points: &[[f64; 2]]) -> Self {
         Self {
             confidences: vec![1.0; points.len()],
-            points,
-            detect_ms: 0.0,
+            points: points.to_vec(),
         }
     }
 
-    /// Ends found in `image` by `detector`, timed.
-    pub fn detected(
-        detector: &dyn EndpointDetector,
-        image: &RgbImage,
-    ) -> Result<Self, DetectError> {
-        let t = std::time::Instant::now();
-        let found = detector.detect(image)?;
-        Ok(Self {
+    /// Ends a network found.
+    pub fn detected(found: &[Detection]) -> Self {
+        Self {
             points: found.iter().map(|d| d.point).collect(),
             confidences: found.iter().map(|d| d.confidence).collect(),
-            detect_ms: t.elapsed().as_secs_f64() * 1e3,
-        })
+        }
     }
 }

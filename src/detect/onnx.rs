@@ -11,7 +11,7 @@ use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
 use super::output::{self, Decoding, Letterbox};
-use super::{DetectError, Detection, DetectorConfig, EndpointDetector, ModelKind};
+use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field};
 
 /// File name of the ONNX Runtime library this build is made for.
 const RUNTIME_FILE: &str = "libonnxruntime.so.1.31.1";
@@ -97,7 +97,7 @@ impl OnnxDetector {
     }
 
     /// Resizes `image` into the input, runs `session` and decodes its output.
-    fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Vec<Detection>, DetectError> {
+    fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Perception, DetectError> {
         let fit = Letterbox::fit(image.width(), image.height(), self.input);
         let tensor = input_tensor(image, fit);
         let [w, h] = self.input;
@@ -109,9 +109,11 @@ impl OnnxDetector {
         let (shape, data) = outputs[0]
             .try_extract_tensor::<f32>()
             .map_err(|e| DetectError::Output(e.to_string()))?;
+        let ends_only = |ends| Perception { ends, field: None };
         match self.kind {
-            ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding),
-            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding),
+            ModelKind::Field => field::decode(shape, data, fit, self.decoding),
+            ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding).map(ends_only),
+            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding).map(ends_only),
         }
     }
 
@@ -131,7 +133,7 @@ impl OnnxDetector {
 }
 
 impl EndpointDetector for OnnxDetector {
-    fn detect(&self, image: &RgbImage) -> Result<Vec<Detection>, DetectError> {
+    fn detect(&self, image: &RgbImage) -> Result<Perception, DetectError> {
         self.run(&mut self.session(), image)
     }
 }

@@ -1,12 +1,14 @@
 //! Cables with no end in view: both of their ends lie outside the frame, so no walk from
 //! an end can find them. Where such a cable crosses the border, the border has a short
-//! run of superpixels whose colour stands out from the rest of the border (mostly
-//! background); each such run not explained by a cable already found becomes an extra
+//! run of pixels that are cable: where the cable field says so when there is one, else
+//! where the superpixels' colour stands out from the rest of the border (mostly
+//! background). Each such run not explained by a cable already found becomes an extra
 //! seed on the border, and only walks that cross the image to another border point
 //! count from it.
 
 use super::Params;
 use super::cable::{Cable, Scene, model_cable};
+use super::field::CableField;
 use super::geometry::{dist3, median};
 use super::graph::Graph;
 use super::pairing::{self, Pairing};
@@ -28,8 +30,13 @@ fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
 /// another border point (see [`border`]). Their ends belong to no given end.
 pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> Vec<Cable> {
     let Scene {
-        walks, graph, sp, ..
+        walks,
+        terrain,
+        field,
+        sp,
+        ..
     } = *scene;
+    let (graph, p) = (terrain.graph, terrain.params);
     let mut covered = vec![false; graph.len()];
     for choice in chosen {
         let joined = choice.joined.map(|j| &walks[j].vertices[..]).unwrap_or(&[]);
@@ -40,13 +47,16 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
             }
         }
     }
-    let seeds = border_seeds(graph, sp, &covered, scene.params);
+    let (evidence, min_score) = match field {
+        Some(f) => (Evidence::Field(f), p.field_border_min_score),
+        None => (Evidence::Colour(graph), p.border_min_score),
+    };
+    let seeds = border_seeds(evidence, sp, &covered, p);
     if seeds.is_empty() {
         return Vec::new();
     }
-    let p = scene.params;
     let min_length = p.border_min_steps * sp.step;
-    let crossing: Vec<Walk> = walk::walk_all(graph, scene.lab, &seeds, sp.step, p)
+    let crossing: Vec<Walk> = walk::walk_all(terrain, &seeds)
         .into_iter()
         .filter(|w| {
             let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
@@ -61,10 +71,10 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
         seeds: &seeds,
         ..*scene
     };
-    pairing::pair(&crossing, &confidence, scene.params)
+    pairing::pair(&crossing, &confidence, p)
         .iter()
         // Only crossing walks were kept, so every pairing ends on the border or a seed.
-        .filter(|c| c.score >= p.border_min_score)
+        .filter(|c| c.score >= min_score)
         .filter_map(|c| model_cable(&border_scene, c))
         .map(|mut cable| {
             cable.end_indices = [None, None];
@@ -73,13 +83,62 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
         .collect()
 }
 
-/// Seeds on the border where an unexplained cable may cross it; `covered[v]` marks the
-/// superpixels already explained by a cable.
+/// What tells a cable crossing the border from background.
+#[derive(Clone, Copy)]
+pub enum Evidence<'a> {
+    /// Colour: a border superpixel whose mean colour differs from the border's median
+    /// by `border_min_contrast` (Lab ΔE).
+    Colour(&'a Graph),
+    /// The cable field: probability at least `field_level`.
+    Field(&'a CableField),
+}
+
+/// Seeds on the border where an unexplained cable may cross it, by `evidence`;
+/// `covered[v]` marks the superpixels already explained by a cable.
 pub fn border_seeds(
-    graph: &Graph,
+    evidence: Evidence<'_>,
     sp: &Superpixels,
     covered: &[bool],
     params: &Params,
+) -> Vec<Seed> {
+    seeds_where(sp, params, |ring, labels| {
+        let cable: Vec<bool> = match evidence {
+            Evidence::Colour(graph) => {
+                let colours: Vec<[f32; 3]> = labels
+                    .iter()
+                    .map(|&v| graph.vertices[v as usize].mean_lab)
+                    .collect();
+                let mut background = [0.0; 3];
+                for (c, b) in background.iter_mut().enumerate() {
+                    let mut channel: Vec<f32> = colours.iter().map(|l| l[c]).collect();
+                    *b = median(&mut channel, f32::total_cmp).unwrap_or(0.0);
+                }
+                colours
+                    .iter()
+                    .map(|&lab| dist3(lab, background) >= params.border_min_contrast)
+                    .collect()
+            }
+            Evidence::Field(field) => ring
+                .iter()
+                .map(|&[x, y]| field.cable_at(x as f32, y as f32) >= params.field_level)
+                .collect(),
+        };
+        cable
+            .iter()
+            .zip(labels)
+            .map(|(&c, &v)| c && !covered[v as usize])
+            .collect()
+    })
+}
+
+/// One seed in the middle of every run of perimeter pixels that `stands_out` marks
+/// (given the ring and each ring pixel's superpixel), when the run is as long as a
+/// cable crossing (`border_min_crossing_px` ..= `border_max_crossing_px`). A run may
+/// wrap past the ring's start.
+fn seeds_where(
+    sp: &Superpixels,
+    params: &Params,
+    stands_out: impl FnOnce(&[[usize; 2]], &[u32]) -> Vec<bool>,
 ) -> Vec<Seed> {
     let (w, h) = (sp.width, sp.height);
     if w < 3 || h < 3 {
@@ -87,38 +146,20 @@ pub fn border_seeds(
     }
     let ring = perimeter(w, h);
     let labels: Vec<u32> = ring.iter().map(|&[x, y]| sp.labels[y * w + x]).collect();
-    let colours: Vec<[f32; 3]> = labels
-        .iter()
-        .map(|&v| graph.vertices[v as usize].mean_lab)
-        .collect();
-    let mut background = [0.0; 3];
-    for (c, b) in background.iter_mut().enumerate() {
-        let mut channel: Vec<f32> = colours.iter().map(|l| l[c]).collect();
-        *b = median(&mut channel, f32::total_cmp).unwrap_or(0.0);
-    }
-    let stands_out: Vec<bool> = labels
-        .iter()
-        .zip(&colours)
-        .map(|(&v, lab)| {
-            dist3(*lab, background) >= params.border_min_contrast && !covered[v as usize]
-        })
-        .collect();
-    // Runs of standing-out pixels along the ring (a run may wrap past the start).
+    let stands_out = stands_out(&ring, &labels);
     let n = ring.len();
     let Some(start) = (0..n).find(|&i| !stands_out[i]) else {
         return Vec::new();
     };
+    let crossing = params.border_min_crossing_px as usize..=params.border_max_crossing_px as usize;
     let mut seeds = Vec::new();
     let mut i = 0;
     while i < n {
-        let at = (start + i) % n;
-        if !stands_out[at] {
+        if !stands_out[(start + i) % n] {
             i += 1;
             continue;
         }
         let run = (i..n).take_while(|&j| stands_out[(start + j) % n]).count();
-        let crossing =
-            params.border_min_crossing_px as usize..=params.border_max_crossing_px as usize;
         if crossing.contains(&run) {
             let mid = (start + i + run / 2) % n;
             let [x, y] = ring[mid];
@@ -171,10 +212,46 @@ mod tests {
         );
         let graph = Graph::build(&sp, &rgb, &lab, 4);
         let p = Params::default();
-        let seeds = border_seeds(&graph, &sp, &vec![false; graph.len()], &p);
+        let seeds = border_seeds(Evidence::Colour(&graph), &sp, &vec![false; graph.len()], &p);
         assert_eq!(seeds.len(), 2, "{seeds:?}");
         assert!(seeds.iter().all(|s| (44.0..52.0).contains(&s.point[0])));
         // Once the stripe is explained, nothing is left to seed.
-        assert!(border_seeds(&graph, &sp, &vec![true; graph.len()], &p).is_empty());
+        assert!(
+            border_seeds(Evidence::Colour(&graph), &sp, &vec![true; graph.len()], &p).is_empty()
+        );
+    }
+
+    #[test]
+    fn a_field_cable_crossing_the_frame_gives_two_border_seeds() {
+        // The field sees a vertical cable in grid column 5 (x 40..48) from top to bottom;
+        // the image itself is plain, so colour alone would see nothing.
+        let (w, h) = (96usize, 72usize);
+        let lab = LabImage::from_rgb(&vec![200u8; w * h * 3], w, h);
+        let sp = slic(
+            &lab,
+            &SlicSettings {
+                n_segments: 150,
+                compactness: 10.0,
+                iterations: 5,
+                min_size_factor: 0.25,
+            },
+        );
+        let (gw, gh) = (w / 8, h / 8);
+        let field = CableField {
+            width: gw,
+            height: gh,
+            cell_px: [8.0, 8.0],
+            cable: (0..gw * gh)
+                .map(|i| if i % gw == 5 { 0.9 } else { 0.0 })
+                .collect(),
+            orientation: vec![[-1.0, 0.0]; gw * gh],
+        };
+        let p = Params::default();
+        let uncovered = vec![false; sp.count];
+        let seeds = border_seeds(Evidence::Field(&field), &sp, &uncovered, &p);
+        assert_eq!(seeds.len(), 2, "{seeds:?}");
+        assert!(seeds.iter().all(|s| (36.0..52.0).contains(&s.point[0])));
+        let graph = Graph::build(&sp, &vec![200u8; w * h * 3], &lab, 4);
+        assert!(border_seeds(Evidence::Colour(&graph), &sp, &uncovered, &p).is_empty());
     }
 }

@@ -3,15 +3,14 @@
 
 use image::RgbImage;
 
-use super::Params;
-use super::color::LabImage;
+use super::field::CableField;
 use super::geometry::{border_exit, dist, heading, median, polyline_length};
 use super::graph::Graph;
 use super::pairing::{FarEnd, Pairing};
 use super::refine;
 use super::spline::BSpline;
 use super::superpixels::Superpixels;
-use super::walk::{Seed, Walk};
+use super::walk::{Seed, Terrain, Walk};
 
 /// One cable found in the image.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +32,12 @@ pub struct Cable {
     pub width_px: f32,
     /// Median sRGB colour along the centreline.
     pub color: [u8; 3],
-    /// Confidence in 0..=1.
+    /// Confidence in 0..=1: the quality of the walk (colour agreement, smoothness,
+    /// lateral contrast, mean cable probability; see `Walk::quality`) times a factor
+    /// for how it ended (confirmed by the walk from the other end: 1; unconfirmed,
+    /// through the border or joined across a gap: the pairing factors), times the
+    /// confidence of its start end when no second end confirms it, times, with a cable
+    /// field, the share of its centreline on cable pixels.
     pub score: f32,
 }
 
@@ -42,11 +46,10 @@ pub struct Cable {
 pub(super) struct Scene<'a> {
     pub walks: &'a [Walk],
     pub seeds: &'a [Seed],
-    pub graph: &'a Graph,
+    pub terrain: Terrain<'a>,
+    pub field: Option<&'a CableField>,
     pub sp: &'a Superpixels,
-    pub lab: &'a LabImage,
     pub image: &'a RgbImage,
-    pub params: &'a Params,
 }
 
 /// Builds the spline model of one chosen walk: data points from the walk, fit,
@@ -55,12 +58,14 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
     let Scene {
         walks,
         seeds,
-        graph,
+        terrain,
+        field,
         sp,
-        lab,
         image,
-        params,
     } = *scene;
+    let Terrain {
+        graph, lab, params, ..
+    } = terrain;
     let walk = &walks[choice.walk];
     let start = seeds[choice.start].point;
     let mut points = vec![start];
@@ -130,6 +135,12 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
     }
     let width_px = width.unwrap_or_else(|| fallback_width(walk, graph, sp));
     let length_px = polyline_length(&polyline);
+    // With a field, the cable must lie on cable pixels: its score is scaled by the share
+    // of its centreline that does, and a walk that wandered onto the background is dropped.
+    let on_cable = field.map_or(1.0, |f| f.share_on_cable(&polyline, params.field_level));
+    if on_cable < params.field_min_share && field.is_some() {
+        return None;
+    }
     Some(Cable {
         id: 0,
         ends: [polyline[0], polyline[polyline.len() - 1]],
@@ -139,7 +150,7 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
         polyline,
         length_px,
         width_px,
-        score: choice.score.clamp(0.0, 1.0),
+        score: (choice.score * on_cable).clamp(0.0, 1.0),
     })
 }
 

@@ -7,13 +7,17 @@
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
 //! makes every superpixel one region, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view, and
-//! [`geometry`] holds the plane geometry they share. [`segment`] runs them in order.
+//! [`geometry`] holds the plane geometry they share; [`field`] reads a network's cable
+//! field (cable probability and direction), which, when given, joins the step score,
+//! stops walks that leave the cables, seeds cables at the border and scores each
+//! cable. [`segment`] runs them in order.
 
 mod border;
 mod cable;
 pub mod color;
 pub mod connectivity;
 mod error;
+pub mod field;
 pub mod geometry;
 pub mod graph;
 pub mod pairing;
@@ -30,6 +34,7 @@ use image::RgbImage;
 
 pub use cable::Cable;
 pub use error::EngineError;
+pub use field::CableField;
 pub use params::{PRESET_NAMES, Params, RANGES};
 pub use render::{Mask, MaskKind};
 
@@ -38,7 +43,7 @@ use cable::Scene;
 use color::LabImage;
 use graph::Graph;
 use superpixels::SlicSettings;
-use walk::Seed;
+use walk::{Seed, Terrain};
 
 /// Smallest image side the engine accepts, pixels.
 pub const MIN_SIDE: u32 = 16;
@@ -90,15 +95,17 @@ pub fn segment(
     ends: &[[f64; 2]],
     params: &Params,
 ) -> Result<Segmentation, EngineError> {
-    segment_with_confidence(image, ends, &vec![1.0; ends.len()], params)
+    segment_with_confidence(image, ends, &vec![1.0; ends.len()], None, params)
 }
 
-/// [`segment`] with a confidence in 0..=1 per end (a detector's scores): a cable that
-/// reaches no second end is only as credible as the end it starts from.
+/// [`segment`] with a confidence in 0..=1 per end (a detector's scores: a cable that
+/// reaches no second end is only as credible as the end it starts from) and, when
+/// given and `use_field` is on, the cable field of the photo.
 pub fn segment_with_confidence(
     image: &RgbImage,
     ends: &[[f64; 2]],
     confidence: &[f32],
+    field: Option<&CableField>,
     params: &Params,
 ) -> Result<Segmentation, EngineError> {
     params.validate()?;
@@ -134,7 +141,16 @@ pub fn segment_with_confidence(
 
     let t = Instant::now();
     let graph = Graph::build(&sp, rgb, &lab, params.hist_bins);
+    let field = field.filter(|_| params.use_field);
+    let vertex_field = field.map(|f| f.per_vertex(&sp));
     timings.graph = ms(t);
+    let terrain = Terrain {
+        graph: &graph,
+        lab: &lab,
+        field: vertex_field.as_deref(),
+        step_px: sp.step,
+        params,
+    };
 
     let t = Instant::now();
     let seeds: Vec<Seed> = ends
@@ -147,7 +163,7 @@ pub fn segment_with_confidence(
             }
         })
         .collect();
-    let walks = walk::walk_all(&graph, &lab, &seeds, sp.step, params);
+    let walks = walk::walk_all(terrain, &seeds);
     let chosen = pairing::pair(&walks, confidence, params);
     timings.walks = ms(t);
 
@@ -157,11 +173,10 @@ pub fn segment_with_confidence(
     let scene = Scene {
         walks: &walks,
         seeds: &seeds,
-        graph: &graph,
+        terrain,
+        field,
         sp: &sp,
-        lab: &lab,
         image,
-        params,
     };
     for choice in &chosen {
         let Some(mut cable) = cable::model_cable(&scene, choice) else {

@@ -161,6 +161,7 @@ mod tests {
             visual: q,
             smoothness: 1.0,
             contrast: 1.0,
+            cable: 1.0,
             length_px: 100.0,
             end_heading: [1.0, 0.0],
             end_point: [0.0, 0.0],

@@ -3,7 +3,7 @@
 //! From every end ("seed") a walk starts towards each ring-1 neighbour of the seed's
 //! superpixel; the first step fixes the initial heading. Each iteration scores every
 //! vertex of the order-d neighbourhood of the head that lies ahead,
-//! p = p_V · p_C · p_D · c, and appends the argmax:
+//! p = p_V · p_C · p_D · c · f, and appends the argmax:
 //!
 //! - p_V = 1 / (1 + c_V (1 − I)), the Bradford density at 1 − I normalised to 1 at
 //!   I = 1, where I is the histogram intersection between the candidate and the walk's
@@ -16,10 +16,16 @@
 //!   the image one superpixel step to either side of the step's direction, divided by
 //!   `contrast_saturation` and capped at 1 (a cable differs from the background on both
 //!   sides; a vertex of the background beside a cable on one side only). Not in the
-//!   paper: it keeps walks off plain background.
+//!   paper: it keeps walks off plain background. 1 with `lateral_contrast` off;
+//! - f, the cable field's term (when a field is given and `use_field` is on):
+//!   (ε + (1 − ε) p) · (1 − w + w a), where p is the candidate's mean cable
+//!   probability, a the agreement of the step with the field's direction
+//!   ([`alignment`]), ε = `field_floor`, w = `field_alignment_weight`; 1 otherwise.
 //!
 //! The argmax is refused (the walk stops) when its colour similarity is below
-//! `min_similarity` or its contrast below `min_contrast`.
+//! `min_similarity`, when its cable probability is below `field_min_cable`, or when its
+//! contrast is below `min_contrast` unless the field is sure (p ≥ `field_trust`) that it
+//! is a cable.
 //!
 //! A walk ends on reaching another seed (within r), on leaving the frame, when the best
 //! candidate's colour no longer matches the model (it left the cable) or at the
@@ -29,6 +35,7 @@
 
 use super::Params;
 use super::color::LabImage;
+use super::field::{VertexField, alignment};
 use super::geometry::{dist, dist3, heading, norm};
 use super::graph::{Graph, Neighbourhood, intersection};
 
@@ -65,8 +72,11 @@ pub struct Walk {
     pub visual: f32,
     /// Geometric mean of the curvature likelihoods of its steps, 0..=1.
     pub smoothness: f32,
-    /// Mean lateral contrast of its vertices, 0..=1 (1: clearly a thin structure).
+    /// Mean lateral contrast of its vertices, 0..=1 (1: clearly a thin structure; 1
+    /// when lateral contrast is off).
     pub contrast: f32,
+    /// Mean cable probability of its vertices, 0..=1 (1 without a field).
+    pub cable: f32,
     /// Length along the centroids, pixels.
     pub length_px: f32,
     /// Unit heading at the walk's head.
@@ -76,25 +86,37 @@ pub struct Walk {
 }
 
 impl Walk {
-    /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b, with
-    /// a = `quality_visual_exponent` (0.5 by default) and b =
-    /// `quality_contrast_exponent` (2).
+    /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b · `cable`^c,
+    /// with a = `quality_visual_exponent` (0.5 by default), b =
+    /// `quality_contrast_exponent` (2) and c = `quality_field_exponent` (1).
     pub fn quality(&self, params: &Params) -> f32 {
         self.visual.powf(params.quality_visual_exponent)
             * self.smoothness
             * self.contrast.powf(params.quality_contrast_exponent)
+            * self.cable.powf(params.quality_field_exponent)
     }
 }
 
-/// Runs all walks from all seeds. `lab` is used to measure lateral contrast.
-pub fn walk_all(
-    graph: &Graph,
-    lab: &LabImage,
-    seeds: &[Seed],
-    step_px: f32,
-    params: &Params,
-) -> Vec<Walk> {
-    let mut walker = Walker::new(graph, lab, seeds, step_px, params);
+/// What walks read: the graph, the Lab image (lateral contrast), the cable field per
+/// vertex when there is one, the superpixel step and the parameters.
+#[derive(Clone, Copy)]
+pub struct Terrain<'a> {
+    /// The region adjacency graph.
+    pub graph: &'a Graph,
+    /// The blurred Lab image.
+    pub lab: &'a LabImage,
+    /// The cable field's mean over each vertex, when a field is used.
+    pub field: Option<&'a [VertexField]>,
+    /// Nominal superpixel step, pixels.
+    pub step_px: f32,
+    /// Parameters.
+    pub params: &'a Params,
+}
+
+/// Runs all walks from all seeds.
+pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Vec<Walk> {
+    let graph = terrain.graph;
+    let mut walker = Walker::new(terrain, seeds);
     let mut walks = Vec::new();
     for (s, seed) in seeds.iter().enumerate() {
         for &first in graph.neighbours(seed.vertex) {
@@ -112,11 +134,13 @@ struct Candidate {
     similarity: f32,
     curvature: f32,
     contrast: f32,
+    cable: f32,
 }
 
 struct Walker<'a> {
     graph: &'a Graph,
     lab: &'a LabImage,
+    field: Option<&'a [VertexField]>,
     seeds: &'a [Seed],
     params: &'a Params,
     /// Lateral offset at which contrast is sampled: one superpixel step.
@@ -130,16 +154,18 @@ struct Walker<'a> {
 }
 
 impl<'a> Walker<'a> {
-    fn new(
-        graph: &'a Graph,
-        lab: &'a LabImage,
-        seeds: &'a [Seed],
-        step_px: f32,
-        params: &'a Params,
-    ) -> Self {
+    fn new(terrain: Terrain<'a>, seeds: &'a [Seed]) -> Self {
+        let Terrain {
+            graph,
+            lab,
+            field,
+            step_px,
+            params,
+        } = terrain;
         Self {
             graph,
             lab,
+            field: field.filter(|_| params.use_field),
             seeds,
             params,
             side_px: step_px,
@@ -173,6 +199,7 @@ impl<'a> Walker<'a> {
         let mut length = dist(points[0], points[1]);
         let (mut log_visual, mut log_curve, mut steps) = (0.0f32, 0.0f32, 0u32);
         let mut contrast_sum = self.contrast(first, heading(&points, p.heading_span_px));
+        let mut cable_sum = self.vertex_field(first).map_or(1.0, |f| f.cable);
         let mut end = self.classify(s, &points, length);
 
         while end.is_none() && (steps as usize) < p.max_steps as usize {
@@ -197,6 +224,7 @@ impl<'a> Walker<'a> {
                 similarity: sim,
                 curvature: pc,
                 contrast,
+                cable,
             }) = found
             else {
                 end = Some(self.stopped(s, here, dir));
@@ -216,6 +244,7 @@ impl<'a> Walker<'a> {
                 *m = (1.0 - rate) * *m + rate * h;
             }
             contrast_sum += contrast;
+            cable_sum += cable;
             end = self.classify(s, &points, length);
         }
         let n = steps.max(1) as f32;
@@ -227,6 +256,7 @@ impl<'a> Walker<'a> {
             visual: (log_visual / n).exp(),
             smoothness: (log_curve / n).exp(),
             contrast: contrast_sum / (vertices.len() - 1) as f32,
+            cable: cable_sum / (vertices.len() - 1) as f32,
             length_px: length,
             vertices,
         })
@@ -263,8 +293,18 @@ impl<'a> Walker<'a> {
             let pv = 1.0 / (1.0 + p.c_visual * (1.0 - similarity));
             let curvature = (p.kappa * (cos - 1.0)).exp();
             let pd = 1.0 / (1.0 + p.c_distance * d / p.max_step_px);
-            let contrast = self.contrast(c, [step[0] / d, step[1] / d]);
-            let score = pv * curvature * pd * contrast;
+            let unit = [step[0] / d, step[1] / d];
+            let contrast = self.contrast(c, unit);
+            let (cable, field_term) = match self.vertex_field(c) {
+                Some(f) => {
+                    let presence = p.field_floor + (1.0 - p.field_floor) * f.cable;
+                    let w = p.field_alignment_weight;
+                    let agreement = 1.0 - w + w * alignment(unit, f.orientation);
+                    (f.cable, presence * agreement)
+                }
+                None => (1.0, 1.0),
+            };
+            let score = pv * curvature * pd * contrast * field_term;
             if best.as_ref().is_none_or(|b| score > b.0) {
                 best = Some((
                     score,
@@ -273,12 +313,23 @@ impl<'a> Walker<'a> {
                         similarity,
                         curvature,
                         contrast,
+                        cable,
                     },
                 ));
             }
         }
-        best.map(|b| b.1)
-            .filter(|b| b.similarity >= p.min_similarity && b.contrast >= p.min_contrast)
+        let field = self.field.is_some();
+        best.map(|b| b.1).filter(|b| {
+            let sure = field && b.cable >= p.field_trust;
+            b.similarity >= p.min_similarity
+                && (!field || b.cable >= p.field_min_cable)
+                && (b.contrast >= p.min_contrast || sure)
+        })
+    }
+
+    /// The field's mean over vertex `v`, when a field is used.
+    fn vertex_field(&self, v: u32) -> Option<VertexField> {
+        self.field.map(|f| f[v as usize])
     }
 
     /// Termination after a step: another seed reached, or the frame left.
@@ -345,8 +396,11 @@ impl<'a> Walker<'a> {
     /// How much vertex `v` differs in colour from the image one step to either side of
     /// the heading `dir`: the smaller of the two Lab distances (a cable differs from the
     /// background on both sides; a walk on the background beside a cable only on one),
-    /// saturating at 1.
+    /// saturating at 1; 1 when lateral contrast is off.
     fn contrast(&self, v: u32, dir: [f32; 2]) -> f32 {
+        if !self.params.lateral_contrast {
+            return 1.0;
+        }
         let vert = &self.graph.vertices[v as usize];
         let c = vert.centroid;
         let normal = [-dir[1], dir[0]];

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::detect::EndpointDetector;
 use crate::engine::{Mask, MaskKind, Params, render};
-use crate::pipeline::{self, EndsSource};
+use crate::pipeline;
 use crate::timings::Timings;
 
 /// Distance within which a detected end matches a true terminal (the 15 px).
@@ -49,12 +49,22 @@ pub struct ImageResult {
 /// Per-cable IoU at or above which a found cable counts as matching a true one.
 pub const MATCH_IOU: f64 = 0.5;
 
-/// Segments `sample` with ends from `detector`, or its true terminal ends when there is
-/// none, and scores it.
+/// Where the evaluated cable ends come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndsFrom {
+    /// The true terminals: ends of the annotated centrelines not on the border.
+    Truth,
+    /// The network's.
+    Network,
+}
+
+/// Segments `sample` with the pipeline (the `network`, when given, also supplies the
+/// cable field) and ends from `ends`, and scores it.
 pub fn evaluate_sample(
     sample: &Sample,
     params: &Params,
-    detector: Option<&dyn EndpointDetector>,
+    network: Option<&dyn EndpointDetector>,
+    ends: EndsFrom,
 ) -> Result<ImageResult, DatasetError> {
     let bytes = std::fs::read(&sample.image).map_err(|e| DatasetError::io(&sample.image, e))?;
     let (w, h) = crate::decode::dimensions(&bytes)
@@ -62,10 +72,8 @@ pub fn evaluate_sample(
     let terminals = terminal_ends(&sample.cables, w, h);
     let out = pipeline::run(&pipeline::Job {
         bytes: &bytes,
-        ends: match detector {
-            Some(d) => EndsSource::Detect(d),
-            None => EndsSource::Given(&terminals),
-        },
+        ends: (ends == EndsFrom::Truth).then_some(&terminals[..]),
+        network,
         params,
         max_pixels: u64::MAX,
         mask: MaskKind::Binary,
@@ -106,14 +114,15 @@ pub fn evaluate_all(
     samples: &[Sample],
     simple: &Params,
     hard: &Params,
-    detector: Option<&dyn EndpointDetector>,
+    network: Option<&dyn EndpointDetector>,
+    ends: EndsFrom,
     mut each: impl FnMut(&ImageResult),
 ) -> Result<Vec<ImageResult>, DatasetError> {
     samples
         .iter()
         .map(|s| {
             let params = if s.set == "hard" { hard } else { simple };
-            let r = evaluate_sample(s, params, detector)?;
+            let r = evaluate_sample(s, params, network, ends)?;
             each(&r);
             Ok(r)
         })

@@ -171,7 +171,7 @@ mod tests {
         assert_eq!(p.get("clutter").unwrap().n_segments, 1200);
         assert_eq!(p.get("clutter").unwrap().compactness, 10.0);
         assert_eq!(p.get("cell-7").unwrap().compactness, 15.0);
-        assert_eq!(p.names(), vec!["cell-7", "clutter", "default"]);
+        assert_eq!(p.names(), vec!["cell-7", "clutter", "default", "paper"]);
         std::fs::write(&file, r#"{"bad": {"n_segments": 0}}"#).unwrap();
         assert!(matches!(
             Presets::load(Some(&file)),

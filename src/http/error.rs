@@ -250,6 +250,8 @@ impl From<PipelineError> for ApiError {
             PipelineError::Detect(e) => e.into(),
             PipelineError::Engine(e) => e.into(),
             PipelineError::Encode(message) => Self::Internal(message),
+            // The service always has a network: this is a bug.
+            PipelineError::NoEnds(message) => Self::Internal(message.into()),
         }
     }
 }

@@ -18,7 +18,7 @@ use super::state::AppState;
 use crate::decode;
 use crate::detect::EndpointDetector;
 use crate::engine::{self, MaskKind, Params};
-use crate::pipeline::{self, EndsSource};
+use crate::pipeline;
 use crate::report::{self, SegmentResponse};
 
 /// Query parameters of `POST /segment`.
@@ -264,10 +264,8 @@ fn run_job(job: Job) -> Result<Output, ApiError> {
     let json = job.format == ResponseFormat::Json;
     let out = pipeline::run(&pipeline::Job {
         bytes: &job.image,
-        ends: match &job.ends {
-            Some(points) => EndsSource::Given(points),
-            None => EndsSource::Detect(job.detector.as_ref()),
-        },
+        ends: job.ends.as_deref(),
+        network: Some(job.detector.as_ref()),
         params: &job.params,
         max_pixels: job.max_pixels,
         mask: job.mask,
@@ -276,7 +274,7 @@ fn run_job(job: Job) -> Result<Output, ApiError> {
     })?;
     for (name, ms) in out.timings.stages() {
         // Inference is timed only when it ran.
-        if name != "endpoints" || job.ends.is_none() {
+        if name != "endpoints" || out.network_ran {
             metrics::stage(name, ms);
         }
     }

@@ -9,13 +9,13 @@ use ariadne_dlo::engine::Params;
 use ariadne_dlo::eval;
 
 /// Weighted IoU of `simple` (preset `default`) and `hard` (preset `clutter`) on the
-/// development split, with the detector's ends or, without one, the true ends.
-pub fn split_iou(detector: Option<&dyn EndpointDetector>) -> (f64, f64) {
+/// development split, with ends from `ends` and the cable field of `network` when given.
+pub fn split_iou(network: Option<&dyn EndpointDetector>, ends: eval::EndsFrom) -> (f64, f64) {
     let samples = eval::load_dataset(&eval::default_dataset_dir())
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
     let simple = Params::preset("default").unwrap();
     let hard = Params::preset("clutter").unwrap();
-    let results = eval::evaluate_all(&samples, &simple, &hard, detector, |_| {}).unwrap();
+    let results = eval::evaluate_all(&samples, &simple, &hard, network, ends, |_| {}).unwrap();
     (
         eval::weighted_iou(&results, "simple"),
         eval::weighted_iou(&results, "hard"),

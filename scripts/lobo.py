@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Leave-one-background-out figures from `ariadne eval --json` runs.
+
+For each background group (white, wood, blue: simple/ by photo number; hard: hard/),
+runs `ariadne eval` with the model trained without that group (out/field-GROUP.onnx,
+made by training/train_field.py --holdout GROUP) and reports, on that group's photos
+only: weighted IoU (the paper's metric), cable recall, terminal recall and precision.
+
+    python3 scripts/lobo.py [--endpoints detect|gt] [--binary target/release/ariadne]
+"""
+
+import argparse
+import json
+import subprocess
+import sys
+
+GROUPS = {"white": range(0, 18), "wood": range(18, 30), "blue": range(30, 40)}
+
+
+def group_of(image):
+    if image["set"] == "hard":
+        return "hard"
+    n = int(image["name"])
+    return next(g for g, r in GROUPS.items() if n in r)
+
+
+def summarise(images):
+    cables = sum(i["gt_cables"] for i in images)
+    return {
+        "images": len(images),
+        "weighted_iou": sum(i["iou"] * i["gt_cables"] for i in images) / max(cables, 1),
+        "cable_recall": sum(i["matched_cables"] for i in images) / max(cables, 1),
+        "terminal_recall": sum(i["terminals_matched"] for i in images)
+        / max(sum(i["terminals"] for i in images), 1),
+        "terminal_precision": sum(i["terminals_matched"] for i in images)
+        / max(sum(i["ends"] for i in images), 1),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--endpoints", default="detect", choices=["detect", "gt"])
+    ap.add_argument("--binary", default="target/release/ariadne")
+    ap.add_argument("--models", default="out/field-{group}.onnx")
+    ap.add_argument("--options", default=None)
+    args = ap.parse_args()
+    rows = {}
+    for group in ["white", "wood", "blue", "hard"]:
+        cmd = [args.binary, "eval", "--json", "--endpoints", args.endpoints,
+               "--model", args.models.format(group=group)]
+        if args.options:
+            cmd += ["--options", args.options]
+        doc = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+        rows[group] = summarise([i for i in doc["images"] if group_of(i) == group])
+    print(f"ends: {args.endpoints}")
+    print("| held-out group | images | weighted IoU | cable recall | terminal recall | terminal precision |")
+    print("|---|---|---|---|---|---|")
+    for g, r in rows.items():
+        print(f"| {g} | {r['images']} | {r['weighted_iou']:.3f} | {r['cable_recall']:.3f} "
+              f"| {r['terminal_recall']:.3f} | {r['terminal_precision']:.3f} |")
+    json.dump(rows, sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
