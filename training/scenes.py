@@ -130,10 +130,18 @@ def smooth_noise(nrng: np.random.Generator, h: int, w: int, scale: float) -> np.
     return np.asarray(small.resize((w, h), Image.BICUBIC), np.float32).clip(-1.5, 1.5)
 
 
+# Also draw the busy textures (`mosaic`, `drips`): an option of train_field.py
+# (`--rich-textures`), off for the bundled model.
+RICH_TEXTURES = False
+
+
 def background(rng: random.Random, h=IN_H, w=IN_W) -> np.ndarray:
     nrng = np.random.default_rng(rng.randrange(1 << 30))
-    kind = rng.choice(["plain", "plain", "gradient", "wood", "paper", "fabric", "metal",
-                       "noise", "clutter", "clutter"])
+    kinds = ["plain", "plain", "gradient", "wood", "paper", "fabric", "metal", "noise",
+             "clutter", "clutter"]
+    if RICH_TEXTURES:
+        kinds += ["mosaic", "mosaic", "drips", "drips"]
+    kind = rng.choice(kinds)
     base = random_colour(rng)
     img = np.ones((h, w, 3), np.float32) * base
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -169,6 +177,22 @@ def background(rng: random.Random, h=IN_H, w=IN_W) -> np.ndarray:
         other = random_colour(rng)
         t = (smooth_noise(nrng, h, w, rng.uniform(3, 40)) * 0.5 + 0.5)[..., None]
         img = img * (1 - t) + other * t
+    elif kind == "mosaic":  # shaded coloured tiles
+        tile = rng.randrange(8, 30)
+        for ty in range(0, h, tile):
+            for tx in range(0, w, tile):
+                c = random_colour(rng, rng.uniform(0.3, 1.0))
+                shade = np.linspace(1.2, 0.6, min(tile, w - tx))[None, :, None]
+                img[ty:ty + tile, tx:tx + tile] = c * shade
+    elif kind == "drips":  # dense thin tangled strokes, many colours (drip painting)
+        pil = Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
+        d = ImageDraw.Draw(pil)
+        for _ in range(rng.randrange(40, 160)):
+            pts = np.cumsum(nrng.normal(0, 6, (rng.randrange(4, 20), 2)), axis=0)
+            pts += (rng.uniform(0, w), rng.uniform(0, h))
+            d.line([tuple(p) for p in pts], fill=tuple(int(v) for v in random_colour(rng)),
+                   width=rng.randrange(1, 3))
+        img = np.asarray(pil, np.float32)
     if kind == "clutter" or rng.random() < 0.25:
         img = clutter(rng, img)
     if rng.random() < 0.35:  # shadows and uneven light

@@ -223,6 +223,8 @@ def main():
                     help="share of photo cables on procedural backgrounds")
     ap.add_argument("--no-copy-paste", action="store_true")
     ap.add_argument("--no-synthetic", action="store_true")
+    ap.add_argument("--rich-textures", action="store_true",
+                    help="also mosaic and drip-painting backgrounds")
     ap.add_argument("--holdout", choices=["white", "wood", "blue", "hard"])
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
@@ -230,6 +232,7 @@ def main():
     ap.add_argument("--out", default="models/cable_field.onnx")
     args = ap.parse_args()
 
+    scenes.RICH_TEXTURES = args.rich_textures
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     np.random.seed(args.seed)
