@@ -138,7 +138,7 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
     // With a field, the cable must lie on cable pixels: its score is scaled by the share
     // of its centreline that does, and a walk that wandered onto the background is dropped.
     let on_cable = field.map_or(1.0, |f| f.share_on_cable(&polyline, params.field_level));
-    if on_cable < params.field_min_share && field.is_some() {
+    if on_cable < params.field_min_share {
         return None;
     }
     Some(Cable {

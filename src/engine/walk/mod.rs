@@ -167,7 +167,7 @@ impl<'a> Walker<'a> {
         Self {
             graph,
             lab,
-            field: field.filter(|_| params.use_field),
+            field,
             seeds,
             params,
             side_px: step_px,
