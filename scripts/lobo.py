@@ -13,15 +13,14 @@ import argparse
 import json
 import subprocess
 import sys
+from pathlib import Path
 
-GROUPS = {"white": range(0, 18), "wood": range(18, 30), "blue": range(30, 40)}
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "training"))
+from groups import GROUPS, background_group  # noqa: E402
 
 
 def group_of(image):
-    if image["set"] == "hard":
-        return "hard"
-    n = int(image["name"])
-    return next(g for g, r in GROUPS.items() if n in r)
+    return background_group(image["set"], image["name"])
 
 
 def summarise(images):
@@ -45,7 +44,7 @@ def main():
     ap.add_argument("--options", default=None)
     args = ap.parse_args()
     rows = {}
-    for group in ["white", "wood", "blue", "hard"]:
+    for group in GROUPS:
         cmd = [args.binary, "eval", "--json", "--endpoints", args.endpoints,
                "--model", args.models.format(group=group)]
         if args.options:

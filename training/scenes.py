@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFilter
 
+from groups import background_group
+
 INPUT_SCALE = 0.5  # the network sees the photo at half resolution
 IN_W, IN_H = 320, 240
 # Ends this close to the border (photo pixels) are where a cable leaves the frame, not
@@ -49,23 +51,6 @@ class Photo:
 
 # ---------------------------------------------------------------------------------------
 # The development split.
-
-
-# Background of each development photo, for leave-one-background-out validation, read
-# off the photos (the split is ordered by background; a colour rule does not separate
-# pale wood from white board: see models/cable_field.md).
-SIMPLE_GROUPS = {"white": range(0, 18), "wood": range(18, 30), "blue": range(30, 40)}
-
-
-def background_group(set_name: str, name: str) -> str:
-    """`hard` for the textured set; `white`, `wood` or `blue` for `simple`."""
-    if set_name == "hard":
-        return "hard"
-    number = int(name)
-    for group, numbers in SIMPLE_GROUPS.items():
-        if number in numbers:
-            return group
-    raise ValueError(f"simple/{name} has no background group")
 
 
 def read_lines(txt: Path) -> list[np.ndarray]:

@@ -39,6 +39,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 import scenes
+from groups import GROUPS
 
 STRIDE = 4
 CHANNELS = 6
@@ -225,7 +226,7 @@ def main():
     ap.add_argument("--no-synthetic", action="store_true")
     ap.add_argument("--rich-textures", action="store_true",
                     help="also mosaic and drip-painting backgrounds")
-    ap.add_argument("--holdout", choices=["white", "wood", "blue", "hard"])
+    ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
     ap.add_argument("--workers", type=int, default=1, help="processes making scenes")
@@ -239,7 +240,7 @@ def main():
     root = Path(os.environ.get("ARIADNE_DATASET", "../shared/datasets/cables"))
     photos = scenes.load_photos(root)
     groups = {g: sorted(f"{p.set}/{p.name}" for p in photos if p.group == g)
-              for g in ("white", "wood", "blue", "hard")}
+              for g in GROUPS}
     train = [p for p in photos if p.group != args.holdout]
     held = [p for p in photos if p.group == args.holdout]
     print(f"train {len(train)} photos; held out ({args.holdout}): {len(held)}", flush=True)
