@@ -2,7 +2,9 @@
 
 use std::io::Cursor;
 
-use image::{ImageFormat, ImageReader, RgbImage};
+use image::{
+    DynamicImage, ImageDecoder, ImageFormat, ImageReader, RgbImage, metadata::Orientation,
+};
 use thiserror::Error;
 
 /// Why bytes could not become an RGB image.
@@ -46,22 +48,45 @@ pub fn sniff(bytes: &[u8]) -> Result<ImageFormat, DecodeError> {
     }
 }
 
-/// Width and height from the header alone (no pixel is decoded). For PNG they are read
-/// straight from the IHDR chunk, so a file that is only a header (a "pixel bomb")
-/// is measured, not rejected as truncated.
+/// Width and height of the photo as displayed (its EXIF orientation applied), from the
+/// header alone: no pixel is decoded. A PNG whose header the decoder refuses (a file
+/// that is only a header, a "pixel bomb") is measured from its IHDR chunk, so it is
+/// refused for its size rather than as truncated.
 pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), DecodeError> {
     let format = sniff(bytes)?;
-    if format == ImageFormat::Png && bytes.len() >= 24 && &bytes[12..16] == b"IHDR" {
-        let be =
-            |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
-        return Ok((be(16), be(20)));
+    let header = ImageReader::with_format(Cursor::new(bytes), format)
+        .into_decoder()
+        .map(|mut d| (d.dimensions(), orientation(&mut d)));
+    match header {
+        Ok(((w, h), o)) if turns_sideways(o) => Ok((h, w)),
+        Ok(((w, h), _)) => Ok((w, h)),
+        Err(_) if format == ImageFormat::Png && bytes.len() >= 24 && &bytes[12..16] == b"IHDR" => {
+            let be =
+                |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+            Ok((be(16), be(20)))
+        }
+        Err(e) => Err(DecodeError::Corrupt(e.to_string())),
     }
-    ImageReader::with_format(Cursor::new(bytes), format)
-        .into_dimensions()
-        .map_err(|e| DecodeError::Corrupt(e.to_string()))
 }
 
-/// Decodes JPEG or PNG `bytes` to 8-bit RGB, refusing more than `max_pixels` pixels
+/// The photo's EXIF orientation; none (or an unreadable one) means upright.
+fn orientation(decoder: &mut impl ImageDecoder) -> Orientation {
+    decoder.orientation().unwrap_or(Orientation::NoTransforms)
+}
+
+/// True for the orientations that swap width and height.
+fn turns_sideways(o: Orientation) -> bool {
+    matches!(
+        o,
+        Orientation::Rotate90
+            | Orientation::Rotate270
+            | Orientation::Rotate90FlipH
+            | Orientation::Rotate270FlipH
+    )
+}
+
+/// Decodes JPEG or PNG `bytes` to 8-bit RGB as displayed (EXIF orientation applied, so
+/// that coordinates are those a person sees), refusing more than `max_pixels` pixels
 /// before allocating them, and refusing truncated JPEG streams (no end-of-image
 /// marker), which decoders would otherwise fill in silently.
 pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError> {
@@ -83,12 +108,15 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     }
     let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
     let mut limits = image::Limits::default();
-    limits.max_image_width = Some(width);
-    limits.max_image_height = Some(height);
+    // The header's sides, in either order (an EXIF orientation may swap them).
+    limits.max_image_width = Some(width.max(height));
+    limits.max_image_height = Some(width.max(height));
     reader.limits(limits);
-    let img = reader
-        .decode()
-        .map_err(|e| DecodeError::Corrupt(e.to_string()))?;
+    let corrupt = |e: image::ImageError| DecodeError::Corrupt(e.to_string());
+    let mut decoder = reader.into_decoder().map_err(corrupt)?;
+    let upright = orientation(&mut decoder);
+    let mut img = DynamicImage::from_decoder(decoder).map_err(corrupt)?;
+    img.apply_orientation(upright);
     Ok(img.into_rgb8())
 }
 

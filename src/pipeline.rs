@@ -1,6 +1,8 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
-//! line, the evaluator and the benchmarks: decode → network (ends and cable field) →
-//! engine → masks → PNG, timed stage by stage in one [`Timings`].
+//! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
+//! resample to the working size → network (ends and cable field) → engine → cables back
+//! in the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
+//! [`Timings`].
 //!
 //! The network runs whenever there is one, also when the caller gives the ends: then
 //! its ends are ignored but its cable field still guides the walks.
@@ -12,7 +14,9 @@ use thiserror::Error;
 
 use crate::decode::{self, DecodeError};
 use crate::detect::{DetectError, EndpointDetector, Ends};
-use crate::engine::{self, EngineError, Mask, MaskKind, Params, Segmentation, render};
+use crate::engine::{
+    self, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, render,
+};
 use crate::timings::{Timings, ms_since as ms};
 
 /// What to do with one photo.
@@ -82,13 +86,24 @@ pub enum PipelineError {
 pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     let started = Instant::now();
     let t = Instant::now();
-    let image = decode::decode_rgb(job.bytes, job.max_pixels)?;
+    let photo = decode::decode_rgb(job.bytes, job.max_pixels)?;
+    let (width, height) = photo.dimensions();
+    if let Some(points) = job.ends {
+        engine::validate_ends(points, width, height)?;
+    }
+    let frame = WorkingFrame::choose(width, height, job.params);
+    let image = frame.resample(&photo);
     let decode_ms = ms(t);
     let t = Instant::now();
     let seen = job.network.map(|n| n.detect(&image)).transpose()?;
     let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
     let ends = match (job.ends, &seen) {
-        (Some(points), _) => Ends::given(points),
+        (Some(points), _) => Ends::given(
+            &points
+                .iter()
+                .map(|&p| frame.working_point(p))
+                .collect::<Vec<_>>(),
+        ),
         (None, Some(seen)) => Ends::detected(&seen.ends),
         (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
     };
@@ -99,10 +114,19 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         &ends.confidences,
         field,
         job.params,
-    )?;
+    )?
+    .inphoto_point(&frame);
+    let ends = match job.ends {
+        Some(points) => Ends::given(points),
+        None => Ends {
+            points: ends.points.iter().map(|&p| frame.photo_point(p)).collect(),
+            ..ends
+        },
+    };
     let t = Instant::now();
-    let mask = render::render_mask(&segmentation, job.mask, job.params.mask_width_px);
-    let overlay = job.overlay.then(|| render::overlay(&image, &segmentation));
+    let mask_width = segmentation.mask_width(job.params.mask_width_px);
+    let mask = render::render_mask(&segmentation, job.mask, mask_width);
+    let overlay = job.overlay.then(|| render::overlay(&photo, &segmentation));
     let mask_ms = ms(t);
     let t = Instant::now();
     let (mask_png, overlay_png) = if job.encode {
@@ -183,9 +207,10 @@ mod tests {
 
     #[test]
     fn given_ends_run_every_stage_but_detection() {
+        // At the working size, so the engine sees the decoded photo itself.
         let scene = crate::synth::scene(&crate::synth::SceneSpec {
-            width: 320,
-            height: 240,
+            width: 640,
+            height: 480,
             cables: 2,
             cable_width: 8.0,
             background: crate::synth::Background::Plain,

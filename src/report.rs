@@ -18,6 +18,10 @@ pub struct SegmentResponse {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
+    /// Working pixels per photo pixel: the photo was segmented resampled by this factor
+    /// (1 at 640x480; README, "Any camera"). `width`, `height` and every coordinate
+    /// are in pixels of the photo as displayed (its EXIF orientation applied).
+    pub working_scale: f32,
     /// Cables found, by decreasing score.
     pub cables: Vec<CableReport>,
     /// Every end used (given or detected), with the cable it was assigned to.
@@ -88,6 +92,7 @@ impl SegmentResponse {
             request_id,
             width: seg.width,
             height: seg.height,
+            working_scale: seg.working_scale,
             cables: seg.cables.iter().map(CableReport::from).collect(),
             endpoints: endpoint_reports(seg, &output.ends.points, &output.ends.confidences),
             mask_png: output.mask_png.as_deref().map(base64).unwrap_or_default(),

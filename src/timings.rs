@@ -11,7 +11,7 @@ use utoipa::ToSchema;
 pub struct Timings {
     /// Waiting for a worker.
     pub queue: f64,
-    /// Image decoding.
+    /// Image decoding, EXIF orientation and resampling to the working size.
     pub decode: f64,
     /// Endpoint detection (0 when ends were given).
     pub endpoints: f64,

@@ -201,6 +201,10 @@ pub struct EvalArgs {
     /// Print one JSON document instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Resize every photo, with its masks and terminals, by these factors (a camera of
+    /// another resolution), one evaluation each, e.g. `0.5,1,2`.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub scale: Vec<f64>,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

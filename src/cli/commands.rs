@@ -70,9 +70,10 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
         if !args.json {
             let t = &r.timings_ms;
             println!(
-                "{:<7} {}  IoU {:.3}  cables {}/{} found {}  ends {} ({}/{} terminals)  ms: ends {:.1} sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
+                "{:<7} {} x{}  IoU {:.3}  cables {}/{} found {}  ends {} ({}/{} terminals)  ms: ends {:.1} sp {:.1} graph {:.1} walks {:.1} splines {:.1} mask {:.1} total {:.1}",
                 r.set,
                 r.name,
+                r.scale,
                 r.iou,
                 r.matched_cables,
                 r.gt_cables,
@@ -90,29 +91,51 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             );
         }
     };
-    let results = eval::evaluate_all(&samples, &simple, &hard, Some(&network), ends, print)?;
-    let summaries = eval::summarise(&results);
+    let mut images = Vec::new();
+    let mut scales = Vec::new();
+    for &scale in &args.scale {
+        if !(scale > 0.0 && scale <= 8.0) {
+            return Err(CliError::BadOptions(format!(
+                "--scale {scale}: expected factors in (0, 8]"
+            )));
+        }
+        let setup = eval::Setup {
+            network: Some(&network),
+            ends,
+            scale,
+        };
+        let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;
+        scales.push((scale, eval::summarise(&results)));
+        images.extend(results);
+    }
     if args.json {
-        let doc = serde_json::json!({ "dataset": dir, "images": results, "sets": summaries });
+        let scales: Vec<_> = scales
+            .iter()
+            .map(|(scale, sets)| serde_json::json!({ "scale": scale, "sets": sets }))
+            .collect();
+        let doc = serde_json::json!({ "dataset": dir, "images": images, "scales": scales });
         println!("{}", serde_json::to_string_pretty(&doc).unwrap_or_default());
     } else {
         println!();
         println!(
-            "set      images  weighted IoU  cable recall  cable precision  matched IoU  end recall  end precision  median ms"
+            "scale  set      images  weighted IoU  cable recall  cable precision  matched IoU  end recall  end precision  median ms"
         );
-        for s in &summaries {
-            println!(
-                "{:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>10.3}  {:>13.3}  {:>9.1}",
-                s.set,
-                s.images,
-                s.weighted_iou,
-                s.cable_recall,
-                s.cable_precision,
-                s.matched_iou,
-                s.terminal_recall,
-                s.terminal_precision,
-                s.median_total_ms
-            );
+        for (scale, summaries) in &scales {
+            for s in summaries {
+                println!(
+                    "{:<5}  {:<8} {:>6}  {:>12.3}  {:>12.3}  {:>15.3}  {:>11.3}  {:>10.3}  {:>13.3}  {:>9.1}",
+                    scale,
+                    s.set,
+                    s.images,
+                    s.weighted_iou,
+                    s.cable_recall,
+                    s.cable_precision,
+                    s.matched_iou,
+                    s.terminal_recall,
+                    s.terminal_precision,
+                    s.median_total_ms
+                );
+            }
         }
     }
     Ok(())

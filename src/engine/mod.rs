@@ -5,7 +5,7 @@
 //! [`superpixels`] (SLIC) → [`graph`] (region adjacency graph) → [`walk`] (walks from
 //! every end) → [`pairing`] (global choice of walks) → [`spline`] (B-spline fit) →
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
-//! makes every superpixel one region, [`cable`]
+//! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view, and
 //! [`geometry`] holds the plane geometry they share; [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
@@ -24,6 +24,7 @@ pub mod pairing;
 mod params;
 pub mod refine;
 pub mod render;
+mod scale;
 pub mod spline;
 pub mod superpixels;
 pub mod walk;
@@ -37,6 +38,7 @@ pub use error::EngineError;
 pub use field::CableField;
 pub use params::{PRESET_NAMES, Params, RANGES};
 pub use render::{Mask, MaskKind};
+pub use scale::WorkingFrame;
 
 use crate::timings::{Timings, ms_since as ms};
 use cable::Scene;
@@ -61,6 +63,9 @@ pub struct Segmentation {
     pub end_cables: Vec<Option<usize>>,
     /// Number of superpixels used.
     pub superpixels: usize,
+    /// Working pixels per photo pixel: the photo was segmented resampled by this
+    /// factor (1: at its own size; see [`WorkingFrame`]).
+    pub working_scale: f32,
     /// Time of the engine's stages (`superpixels` to `splines`; the rest are 0).
     pub timings: Timings,
 }
@@ -206,6 +211,7 @@ pub fn segment_with_confidence(
         cables,
         end_cables,
         superpixels: sp.count,
+        working_scale: 1.0,
         timings,
     })
 }

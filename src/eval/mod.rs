@@ -3,9 +3,11 @@
 
 mod dataset;
 mod metrics;
+mod view;
 
 pub use dataset::{DatasetError, Sample, default_dataset_dir, load_dataset, terminal_ends};
 pub use metrics::{SetSummary, iou, match_cables, match_points, summarise};
+pub use view::View;
 
 use image::GrayImage;
 use serde::Serialize;
@@ -25,6 +27,8 @@ pub struct ImageResult {
     pub set: String,
     /// Image stem (`00012`).
     pub name: String,
+    /// Factor the photo, its masks and its terminals were resized by.
+    pub scale: f64,
     /// Cables in the ground truth.
     pub gt_cables: usize,
     /// Cables found.
@@ -39,7 +43,7 @@ pub struct ImageResult {
     pub ends: usize,
     /// True terminals (centreline ends off the border).
     pub terminals: usize,
-    /// Ends within [`TERMINAL_MATCH_PX`] of a true terminal, one-to-one.
+    /// Ends within [`TERMINAL_MATCH_PX`] (times the scale) of a true terminal, one-to-one.
     pub terminals_matched: usize,
     /// Milliseconds per stage (no encoding: the mask is scored directly; `total` is
     /// the pipeline's time).
@@ -58,22 +62,31 @@ pub enum EndsFrom {
     Network,
 }
 
-/// Segments `sample` with the pipeline (the `network`, when given, also supplies the
-/// cable field) and ends from `ends`, and scores it.
+/// How one evaluation runs: the ends' source and the photos' scale.
+#[derive(Clone, Copy)]
+pub struct Setup<'a> {
+    /// The network, when given, also supplies the cable field.
+    pub network: Option<&'a dyn EndpointDetector>,
+    /// Where the ends come from.
+    pub ends: EndsFrom,
+    /// Factor every photo is resized by, with its masks and terminals (a camera of
+    /// another resolution); 1 reads the files as they are.
+    pub scale: f64,
+}
+
+/// Segments `sample` with the pipeline as `setup` says, and scores it.
 pub fn evaluate_sample(
     sample: &Sample,
     params: &Params,
-    network: Option<&dyn EndpointDetector>,
-    ends: EndsFrom,
+    setup: Setup<'_>,
 ) -> Result<ImageResult, DatasetError> {
-    let bytes = std::fs::read(&sample.image).map_err(|e| DatasetError::io(&sample.image, e))?;
-    let (w, h) = crate::decode::dimensions(&bytes)
-        .map_err(|e| DatasetError::Image(sample.image.clone(), e.to_string()))?;
-    let terminals = terminal_ends(&sample.cables, w, h);
+    let view = View::of(sample, setup.scale)?;
+    let (w, h) = view.size;
+    let terminals = &view.terminals;
     let out = pipeline::run(&pipeline::Job {
-        bytes: &bytes,
-        ends: (ends == EndsFrom::Truth).then_some(&terminals[..]),
-        network,
+        bytes: &view.bytes,
+        ends: (setup.ends == EndsFrom::Truth).then_some(&terminals[..]),
+        network: setup.network,
         params,
         max_pixels: u64::MAX,
         mask: MaskKind::Binary,
@@ -85,25 +98,28 @@ pub fn evaluate_sample(
         unreachable!("binary masks are single-channel")
     };
     let seg = &out.segmentation;
-    let gt_all = sample.mask_all()?;
-    let gt_each = sample.cable_masks()?;
     let found: Vec<GrayImage> = seg
         .cables
         .iter()
-        .map(|c| render::cable_mask(c, w, h, params.mask_width_px))
+        .map(|c| render::cable_mask(c, w, h, seg.mask_width(params.mask_width_px)))
         .collect();
-    let (matched_cables, matched_iou_sum) = match_cables(&found, &gt_each, MATCH_IOU);
+    let (matched_cables, matched_iou_sum) = match_cables(&found, &view.cable_masks, MATCH_IOU);
     Ok(ImageResult {
         set: sample.set.clone(),
         name: sample.name.clone(),
+        scale: setup.scale,
         gt_cables: sample.cables.len(),
         found_cables: seg.cables.len(),
         matched_cables,
         matched_iou_sum,
-        iou: iou(pred, &gt_all),
+        iou: iou(pred, &view.mask_all),
         ends: out.ends.points.len(),
         terminals: terminals.len(),
-        terminals_matched: match_points(&out.ends.points, &terminals, TERMINAL_MATCH_PX),
+        terminals_matched: match_points(
+            &out.ends.points,
+            terminals,
+            TERMINAL_MATCH_PX * setup.scale,
+        ),
         timings_ms: out.timings,
     })
 }
@@ -114,15 +130,14 @@ pub fn evaluate_all(
     samples: &[Sample],
     simple: &Params,
     hard: &Params,
-    network: Option<&dyn EndpointDetector>,
-    ends: EndsFrom,
+    setup: Setup<'_>,
     mut each: impl FnMut(&ImageResult),
 ) -> Result<Vec<ImageResult>, DatasetError> {
     samples
         .iter()
         .map(|s| {
             let params = if s.set == "hard" { hard } else { simple };
-            let r = evaluate_sample(s, params, network, ends)?;
+            let r = evaluate_sample(s, params, setup)?;
             each(&r);
             Ok(r)
         })

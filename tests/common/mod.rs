@@ -15,7 +15,12 @@ pub fn split_iou(network: Option<&dyn EndpointDetector>, ends: eval::EndsFrom) -
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
     let simple = Params::preset("default").unwrap();
     let hard = Params::preset("clutter").unwrap();
-    let results = eval::evaluate_all(&samples, &simple, &hard, network, ends, |_| {}).unwrap();
+    let setup = eval::Setup {
+        network,
+        ends,
+        scale: 1.0,
+    };
+    let results = eval::evaluate_all(&samples, &simple, &hard, setup, |_| {}).unwrap();
     (
         eval::weighted_iou(&results, "simple"),
         eval::weighted_iou(&results, "hard"),

@@ -32,6 +32,13 @@ pub struct Params {
     /// into a neighbour when connectivity is enforced.
     pub min_size_factor: f32,
 
+    // --- working resolution (see `scale`) ---
+    /// Pixels of the image the engine works on: photos of another size are resampled
+    /// to about this many (640x480 = 307,200, the size the lengths below suit).
+    pub working_pixels: u32,
+    /// Largest enlargement of a small photo to reach `working_pixels`.
+    pub max_upscale: f32,
+
     // --- graph ---
     /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
     /// (paper: 8, authors' code: 3).
@@ -212,6 +219,8 @@ impl Default for Params {
             sigma: 1.0,
             slic_iterations: 10,
             min_size_factor: 0.25,
+            working_pixels: 307_200,
+            max_upscale: 2.0,
             hist_bins: 4,
             neighbourhood_order: 3,
             jump_order: 5,

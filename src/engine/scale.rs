@@ -1,0 +1,163 @@
+//! The working resolution. The engine's lengths (superpixel density, step lengths,
+//! radii, mask width) are in pixels and suit a photo of a work cell of about 640x480,
+//! where cables are 8-14 px wide. A photo of another size is resampled to about
+//! [`Params::working_pixels`] pixels (enlarged at most [`Params::max_upscale`] times),
+//! segmented there, and its cables are mapped back to the photo's pixels.
+
+use std::borrow::Cow;
+
+use image::{RgbImage, imageops};
+
+use super::geometry::polyline_length;
+use super::{MIN_SIDE, Params, Segmentation};
+
+/// Relative size changes smaller than this are not worth a resampling.
+const SAME_SIZE: f64 = 0.05;
+
+/// A photo's size and the size it is segmented at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorkingFrame {
+    /// The photo's width and height, pixels.
+    pub photo: [u32; 2],
+    /// The working image's width and height, pixels.
+    pub working: [u32; 2],
+}
+
+impl WorkingFrame {
+    /// The working size of a `width` x `height` photo under `params`.
+    pub fn choose(width: u32, height: u32, params: &Params) -> Self {
+        let pixels = width as f64 * height as f64;
+        let scale = (params.working_pixels as f64 / pixels.max(1.0))
+            .sqrt()
+            .min(params.max_upscale as f64);
+        let side = |v: u32| {
+            let scaled = (v as f64 * scale).round().max(1.0) as u32;
+            scaled.max(v.min(MIN_SIDE))
+        };
+        let working = if (scale - 1.0).abs() < SAME_SIZE {
+            [width, height]
+        } else {
+            [side(width), side(height)]
+        };
+        Self {
+            photo: [width, height],
+            working,
+        }
+    }
+
+    /// Working pixels per photo pixel along x and y.
+    fn factors(&self) -> [f64; 2] {
+        [0, 1].map(|i| self.working[i] as f64 / self.photo[i] as f64)
+    }
+
+    /// Working pixels per photo pixel (the geometric mean of the two axes): 1 when the
+    /// photo is segmented as it is.
+    pub fn scale(&self) -> f32 {
+        let [sx, sy] = self.factors();
+        (sx * sy).sqrt() as f32
+    }
+
+    /// True when the photo is segmented at its own size.
+    pub fn is_identity(&self) -> bool {
+        self.photo == self.working
+    }
+
+    /// A photo point (pixel centres at integers) in working pixels, kept inside the image.
+    pub fn working_point(&self, p: [f64; 2]) -> [f64; 2] {
+        let f = self.factors();
+        [0, 1].map(|i| ((p[i] + 0.5) * f[i] - 0.5).clamp(0.0, (self.working[i] - 1) as f64))
+    }
+
+    /// A working point in photo pixels.
+    pub fn photo_point(&self, p: [f64; 2]) -> [f64; 2] {
+        let f = self.factors();
+        [0, 1].map(|i| (p[i] + 0.5) / f[i] - 0.5)
+    }
+
+    /// [`Self::photo_point`] for `f32` points.
+    fn photo_point_f32(&self, p: [f32; 2]) -> [f32; 2] {
+        self.photo_point(p.map(f64::from)).map(|v| v as f32)
+    }
+
+    /// The photo resampled to the working size: averaging boxes when it shrinks, a
+    /// triangle filter when it grows, the photo itself when the sizes agree.
+    pub fn resample<'a>(&self, photo: &'a RgbImage) -> Cow<'a, RgbImage> {
+        let [w, h] = self.working;
+        if self.is_identity() {
+            Cow::Borrowed(photo)
+        } else if w < self.photo[0] {
+            Cow::Owned(imageops::thumbnail(photo, w, h))
+        } else {
+            Cow::Owned(imageops::resize(
+                photo,
+                w,
+                h,
+                imageops::FilterType::Triangle,
+            ))
+        }
+    }
+}
+
+impl Segmentation {
+    /// These cables, found in the working image of `frame`, in the photo's pixels:
+    /// points, splines (an affine map moves control points alone), lengths, widths.
+    pub fn inphoto_point(mut self, frame: &WorkingFrame) -> Self {
+        if frame.is_identity() {
+            return self;
+        }
+        let scale = frame.scale();
+        for cable in &mut self.cables {
+            cable.ends = cable.ends.map(|p| frame.photo_point_f32(p));
+            for p in &mut cable.polyline {
+                *p = frame.photo_point_f32(*p);
+            }
+            for p in &mut cable.spline.control_points {
+                *p = frame.photo_point(*p);
+            }
+            cable.length_px = polyline_length(&cable.polyline);
+            cable.width_px /= scale;
+        }
+        [self.width, self.height] = frame.photo;
+        self.working_scale = scale;
+        self
+    }
+
+    /// The mask stroke width in the photo's pixels for `mask_width_px` working pixels
+    /// (0 stays 0: each cable's measured width).
+    pub fn mask_width(&self, mask_width_px: f32) -> f32 {
+        mask_width_px / self.working_scale
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn photos_are_brought_to_the_working_size() {
+        let p = Params::default();
+        let vga = WorkingFrame::choose(640, 480, &p);
+        assert!(vga.is_identity());
+        assert_eq!(vga.scale(), 1.0);
+        let big = WorkingFrame::choose(4000, 3000, &p);
+        assert_eq!(big.working, [640, 480]);
+        let portrait = WorkingFrame::choose(1080, 1920, &p);
+        assert_eq!(portrait.working, [416, 739]);
+        // Small photos are enlarged, at most max_upscale times.
+        assert_eq!(WorkingFrame::choose(320, 240, &p).working, [640, 480]);
+        assert_eq!(WorkingFrame::choose(100, 100, &p).working, [200, 200]);
+        assert_eq!(WorkingFrame::choose(10, 10, &p).working, [20, 20]);
+    }
+
+    #[test]
+    fn points_map_both_ways_and_stay_inside() {
+        let frame = WorkingFrame::choose(1280, 960, &Params::default());
+        assert_eq!(frame.scale(), 0.5);
+        for p in [[1.0, 2.0], [1278.0, 958.0], [100.25, 733.5]] {
+            let back = frame.photo_point(frame.working_point(p));
+            assert!((back[0] - p[0]).abs() < 1e-9 && (back[1] - p[1]).abs() < 1e-9);
+        }
+        assert_eq!(frame.working_point([1279.0, 959.0]), [639.0, 479.0]);
+        assert_eq!(frame.working_point([0.0, 0.0]), [0.0, 0.0]);
+    }
+}

@@ -1,0 +1,227 @@
+//! Any camera: photos with an EXIF orientation, portrait photos, a 12 MP photo and a
+//! perspective scene are segmented in the pixels of the photo as displayed, at the
+//! working resolution (README, "Any camera"). Ends are given, so no model is needed.
+
+#![allow(clippy::unwrap_used)] // test code: a failure should panic
+
+use ariadne_dlo::engine::{MaskKind, Params, render};
+use ariadne_dlo::pipeline::{self, Job, Output};
+use ariadne_dlo::synth::{Background, Scene, SceneSpec, scene};
+use image::codecs::jpeg::JpegEncoder;
+use image::{DynamicImage, GrayImage, Luma, Rgb, RgbImage, metadata::Orientation};
+
+/// The photo as a JPEG of quality 95.
+fn jpeg(image: &RgbImage) -> Vec<u8> {
+    let mut out = Vec::new();
+    JpegEncoder::new_with_quality(&mut out, 95)
+        .encode_image(image)
+        .unwrap();
+    out
+}
+
+/// `jpeg` with an EXIF APP1 segment right after its start-of-image marker holding one
+/// tag: orientation (0x0112) = `orientation`, little-endian TIFF.
+fn with_exif_orientation(jpeg: &[u8], orientation: u16) -> Vec<u8> {
+    let mut tiff = b"II*\0".to_vec();
+    tiff.extend_from_slice(&8u32.to_le_bytes()); // first IFD right after the header
+    tiff.extend_from_slice(&1u16.to_le_bytes()); // one entry
+    tiff.extend_from_slice(&0x0112u16.to_le_bytes());
+    tiff.extend_from_slice(&3u16.to_le_bytes()); // SHORT
+    tiff.extend_from_slice(&1u32.to_le_bytes()); // count
+    tiff.extend_from_slice(&orientation.to_le_bytes());
+    tiff.extend_from_slice(&[0, 0]); // value padding
+    tiff.extend_from_slice(&0u32.to_le_bytes()); // no next IFD
+    let mut app1 = b"Exif\0\0".to_vec();
+    app1.extend_from_slice(&tiff);
+    let mut out = jpeg[..2].to_vec();
+    out.extend_from_slice(&[0xFF, 0xE1]);
+    out.extend_from_slice(&(app1.len() as u16 + 2).to_be_bytes());
+    out.extend_from_slice(&app1);
+    out.extend_from_slice(&jpeg[2..]);
+    out
+}
+
+/// The pipeline on `bytes` with the given ends and no network.
+fn run(bytes: &[u8], ends: &[[f64; 2]]) -> Output {
+    pipeline::run(&Job {
+        bytes,
+        ends: Some(ends),
+        network: None,
+        params: &Params::default(),
+        max_pixels: u64::MAX,
+        mask: MaskKind::Binary,
+        overlay: false,
+        encode: false,
+    })
+    .unwrap()
+}
+
+/// Asserts that every true end lies within `tol` pixels of an end of a found cable,
+/// and that as many cables as true ones were found.
+fn assert_found(out: &Output, truth: &Scene, tol: f32) {
+    let found: Vec<[f32; 2]> = out
+        .segmentation
+        .cables
+        .iter()
+        .flat_map(|c| c.ends)
+        .collect();
+    assert_eq!(out.segmentation.cables.len(), truth.cables.len());
+    for p in truth.ends() {
+        let d = found
+            .iter()
+            .map(|q| (q[0] - p[0] as f32).hypot(q[1] - p[1] as f32))
+            .fold(f32::MAX, f32::min);
+        assert!(d <= tol, "true end {p:?} is {d:.1} px from every found end");
+    }
+}
+
+/// The output's binary mask.
+fn mask(out: &Output) -> &GrayImage {
+    let render::Mask::Gray(mask) = &out.mask else {
+        unreachable!("binary masks are single-channel")
+    };
+    mask
+}
+
+/// IoU of the output's binary mask with the truth.
+fn mask_iou(out: &Output, truth: &GrayImage) -> f64 {
+    ariadne_dlo::eval::iou(mask(out), truth)
+}
+
+/// Two random cables on a plain background (of the synthetic scenes, pairs are seldom
+/// ambiguous: ends touching the other cable).
+fn spec(width: u32, height: u32, cable_width: f32, seed: u64) -> SceneSpec {
+    SceneSpec {
+        width,
+        height,
+        cables: 2,
+        cable_width,
+        background: Background::Plain,
+        seed,
+    }
+}
+
+#[test]
+fn every_exif_orientation_is_applied_before_anything_else() {
+    let truth = scene(&spec(640, 480, 9.0, 1));
+    let upright = DynamicImage::ImageRgb8(truth.image.clone());
+    for tag in 1..=8u8 {
+        let shown = Orientation::from_exif(tag).unwrap();
+        // The sensor's pixels: the displayed photo turned back. Turns by a quarter are
+        // undone by the opposite quarter; flips and the two transposes undo themselves.
+        let undo = match shown {
+            Orientation::Rotate90 => Orientation::Rotate270,
+            Orientation::Rotate270 => Orientation::Rotate90,
+            other => other,
+        };
+        let mut stored = upright.clone();
+        stored.apply_orientation(undo);
+        let bytes = with_exif_orientation(&jpeg(&stored.into_rgb8()), tag.into());
+        assert_eq!(
+            ariadne_dlo::decode::dimensions(&bytes).unwrap(),
+            (640, 480),
+            "orientation {tag}"
+        );
+        let out = run(&bytes, &truth.ends());
+        let seg = &out.segmentation;
+        assert_eq!((seg.width, seg.height), (640, 480), "orientation {tag}");
+        assert_found(&out, &truth, 6.0);
+        assert!(mask_iou(&out, &truth.mask) > 0.6, "orientation {tag}");
+    }
+}
+
+#[test]
+fn a_portrait_phone_photo_is_segmented_upright_at_the_working_size() {
+    // 1080x1920: cables about 3x as wide as at 640x480.
+    let truth = scene(&spec(1080, 1920, 26.0, 1));
+    let out = run(&jpeg(&truth.image), &truth.ends());
+    let seg = &out.segmentation;
+    assert_eq!((seg.width, seg.height), (1080, 1920));
+    assert!(
+        (seg.working_scale - 0.385).abs() < 0.01,
+        "{}",
+        seg.working_scale
+    );
+    assert_found(&out, &truth, 15.0);
+    for cable in &seg.cables {
+        assert!(
+            (18.0..36.0).contains(&cable.width_px),
+            "width {} in photo pixels",
+            cable.width_px
+        );
+    }
+    assert!(mask_iou(&out, &truth.mask) > 0.6);
+}
+
+#[test]
+fn a_12_mp_photo_is_segmented_in_its_own_pixels() {
+    let truth = scene(&spec(4000, 3000, 56.0, 1));
+    let out = run(&jpeg(&truth.image), &truth.ends());
+    assert_eq!(mask(&out).dimensions(), (4000, 3000));
+    assert!((out.segmentation.working_scale - 0.16).abs() < 1e-6);
+    assert_found(&out, &truth, 40.0);
+    assert!(mask_iou(&out, &truth.mask) > 0.6);
+}
+
+#[test]
+fn a_small_photo_is_enlarged_and_mapped_back() {
+    let truth = scene(&spec(320, 240, 4.5, 2));
+    let out = run(&jpeg(&truth.image), &truth.ends());
+    assert_eq!(out.segmentation.working_scale, 2.0);
+    assert_eq!(mask(&out).dimensions(), (320, 240));
+    assert_found(&out, &truth, 4.0);
+}
+
+#[test]
+fn far_cables_half_as_wide_as_near_ones_are_all_found() {
+    // A table seen at an angle: the far (top) cable 6 px wide, the near (bottom) one
+    // 12 px, and one running from far to near whose width grows along it.
+    let (w, h) = (640u32, 480u32);
+    let mut image = RgbImage::from_pixel(w, h, Rgb([226, 222, 214]));
+    let mut mask = GrayImage::new(w, h);
+    let arc = |y0: f32, y1: f32, bend: f32| -> Vec<[f32; 2]> {
+        (0..=400)
+            .map(|i| {
+                let t = i as f32 / 400.0;
+                [
+                    80.0 + 480.0 * t,
+                    y0 + (y1 - y0) * t + bend * 4.0 * t * (1.0 - t),
+                ]
+            })
+            .collect()
+    };
+    let diagonal: Vec<[f32; 2]> = (0..=400)
+        .map(|i| {
+            let t = i as f32 / 400.0;
+            [200.0 + 60.0 * (t * 3.0).sin(), 60.0 + 360.0 * t]
+        })
+        .collect();
+    // Centreline, colour, width at its start and at its end.
+    let cables = [
+        (arc(90.0, 70.0, 20.0), [190, 35, 30], 6.0, 6.0),
+        (arc(400.0, 380.0, -30.0), [30, 60, 180], 12.0, 12.0),
+        (diagonal, [35, 140, 50], 6.0, 12.0),
+    ];
+    let mut truth_cables = Vec::new();
+    for (line, colour, start, end) in &cables {
+        for (k, piece) in line.windows(2).enumerate() {
+            let t = k as f32 / line.len() as f32;
+            render::stroke(piece, start + (end - start) * t, w, h, |x, y| {
+                image.put_pixel(x, y, Rgb(*colour));
+                mask.put_pixel(x, y, Luma([255]));
+            });
+        }
+        truth_cables.push(ariadne_dlo::synth::SynthCable {
+            centreline: line.clone(),
+            color: *colour,
+        });
+    }
+    let truth = Scene {
+        image,
+        cables: truth_cables,
+        mask,
+    };
+    let out = run(&jpeg(&truth.image), &truth.ends());
+    assert_found(&out, &truth, 6.0);
+    assert!(mask_iou(&out, &truth.mask) > 0.6);
+}
