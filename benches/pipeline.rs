@@ -1,5 +1,6 @@
 //! Benchmarks on real dataset images (640x480): each stage alone, endpoint detection,
-//! and the whole `segment` path from JPEG bytes to the mask PNG, single-threaded.
+//! and the whole `segment` path from JPEG bytes to the mask PNG, single-threaded; the
+//! whole path also on the same photos enlarged to 2, 5 and 12 MP.
 //!
 //! Run: `cargo bench --bench pipeline` (reads the dataset from `$ARIADNE_DATASET`,
 //! default `../shared/datasets/cables`).
@@ -59,6 +60,50 @@ fn cable_field_640x480(bencher: divan::Bencher) {
 fn segment_with_detection_640x480(bencher: divan::Bencher) {
     let detector = single_thread_detector();
     bench_segment(bencher, Some(&detector));
+}
+
+/// Photo sizes of the camera benchmark: 0.3, 2, 5 and 12 MP (4:3).
+const CAMERA_SIZES: [(u32, u32); 4] = [(640, 480), (1632, 1224), (2592, 1944), (4000, 3000)];
+
+/// A photo alone at each of [`CAMERA_SIZES`]: development photos enlarged (Catmull-Rom)
+/// and saved as JPEG of quality 90, through the whole service path (decode, resampling
+/// to the working size, network, engine, mask at the photo's size, PNG).
+#[divan::bench(args = CAMERA_SIZES, sample_count = 10)]
+fn segment_with_detection_by_size(bencher: divan::Bencher, size: (u32, u32)) {
+    let photos: Vec<Vec<u8>> = fixtures()
+        .iter()
+        .take(3)
+        .map(|f| {
+            let big = image::imageops::resize(
+                &f.image,
+                size.0,
+                size.1,
+                image::imageops::FilterType::CatmullRom,
+            );
+            let mut jpeg = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 90)
+                .encode_image(&big)
+                .unwrap();
+            jpeg
+        })
+        .collect();
+    let detector = single_thread_detector();
+    let p = Params::default();
+    let mut i = 0;
+    bencher.bench_local(|| {
+        i += 1;
+        pipeline::run(&pipeline::Job {
+            bytes: &photos[i % photos.len()],
+            ends: None,
+            network: Some(&detector),
+            params: &p,
+            max_pixels: u64::MAX,
+            mask: MaskKind::Binary,
+            overlay: false,
+            encode: true,
+        })
+        .unwrap()
+    });
 }
 
 /// Decode → engine (true ends, no field) → binary mask → PNG.

@@ -44,6 +44,38 @@ fn bundled_model_finds_the_terminals() {
     }
 }
 
+/// A portrait camera: the development photos turned a quarter (480x640) are fed to
+/// the network at the same scale as landscape ones (their own shape, padded), so it
+/// finds their terminals as well as in the landscape photos.
+#[test]
+fn portrait_photos_are_seen_at_the_landscape_scale() {
+    let detector = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
+    let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
+    let (mut upright, mut turned, mut truth) = (0, 0, 0);
+    for s in samples.iter().filter(|s| s.set == "simple").step_by(3) {
+        let bytes = std::fs::read(&s.image).unwrap();
+        let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
+        let terminals = eval::terminal_ends(&s.cables, image.width(), image.height());
+        let ends = Ends::detected(&detector.detect(&image).unwrap().ends).points;
+        upright += eval::match_points(&ends, &terminals, TERMINAL_MATCH_PX);
+        // A quarter turn clockwise: (x, y) goes to (H - 1 - y, x).
+        let portrait = image::imageops::rotate90(&image);
+        let h = image.height() as f64;
+        let turned_terminals: Vec<[f64; 2]> =
+            terminals.iter().map(|&[x, y]| [h - 1.0 - y, x]).collect();
+        let ends = Ends::detected(&detector.detect(&portrait).unwrap().ends).points;
+        turned += eval::match_points(&ends, &turned_terminals, TERMINAL_MATCH_PX);
+        truth += terminals.len();
+    }
+    let (upright, turned) = (upright as f64 / truth as f64, turned as f64 / truth as f64);
+    eprintln!("terminal recall: landscape {upright:.3}, portrait {turned:.3}");
+    assert!(
+        turned >= upright - 0.08,
+        "portrait {turned:.3} vs {upright:.3}"
+    );
+}
+
 /// End to end on the development split with the bundled network: a photo alone (its
 /// ends and field), and the true ends guided by its field. Floors a little under the
 /// measured values (README, Accuracy; in-sample for this model), which are themselves

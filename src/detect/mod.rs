@@ -81,6 +81,18 @@ pub enum ModelKind {
     Yolo,
 }
 
+impl ModelKind {
+    /// What a free input side must be a multiple of: the model's output stride (the
+    /// cable field's 4, a heatmap's 8 at most, YOLO's 32).
+    pub fn stride(self) -> usize {
+        match self {
+            Self::Field => 4,
+            Self::Heatmap => 8,
+            Self::Yolo => 32,
+        }
+    }
+}
+
 impl FromStr for ModelKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

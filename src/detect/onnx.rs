@@ -33,12 +33,55 @@ pub fn default_runtime_candidates() -> Vec<PathBuf> {
     paths
 }
 
+/// The size a photo is fed to the network at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum InputSize {
+    /// The model declares its width and height: the photo is letterboxed into them.
+    Fixed([usize; 2]),
+    /// The model takes any multiple of `stride`: the photo is scaled to about `area`
+    /// pixels whatever its aspect ratio (portrait or landscape alike), then padded.
+    Dynamic {
+        /// Pixels of the scaled photo (the configured input width × height).
+        area: usize,
+        /// Both sides are padded to a multiple of this.
+        stride: usize,
+    },
+}
+
+impl InputSize {
+    /// The size declared by `session`'s first input (`[1, 3, H, W]`, a dimension < 1
+    /// being free), else the configured area at the model kind's stride.
+    fn of(session: &Session, config: &DetectorConfig) -> Self {
+        let declared = session
+            .inputs()
+            .first()
+            .and_then(|input| input.dtype().tensor_shape())
+            .map(|shape| shape.to_vec())
+            .unwrap_or_default();
+        match declared[..] {
+            [_, _, h, w] if h > 0 && w > 0 => Self::Fixed([w as usize, h as usize]),
+            _ => Self::Dynamic {
+                area: config.model_input_width * config.model_input_height,
+                stride: config.model_kind.stride(),
+            },
+        }
+    }
+
+    /// How a `width` x `height` photo fits.
+    fn fit(self, width: u32, height: u32) -> Letterbox {
+        match self {
+            Self::Fixed(input) => Letterbox::fit(width, height, input),
+            Self::Dynamic { area, stride } => Letterbox::fit_area(width, height, area, stride),
+        }
+    }
+}
+
 /// A model run by ONNX Runtime on the CPU.
 pub struct OnnxDetector {
     sessions: Vec<Mutex<Session>>,
     next: AtomicUsize,
     kind: ModelKind,
-    input: [usize; 2],
+    input: InputSize,
     decoding: Decoding,
 }
 
@@ -67,11 +110,15 @@ impl OnnxDetector {
         let sessions = (0..sessions.max(1))
             .map(|_| build_session(environment, config).map(Mutex::new))
             .collect::<Result<Vec<_>, _>>()?;
+        let input = InputSize::of(
+            &sessions[0].lock().unwrap_or_else(PoisonError::into_inner),
+            config,
+        );
         let detector = Self {
             sessions,
             next: AtomicUsize::new(0),
             kind: config.model_kind,
-            input: [config.model_input_width, config.model_input_height],
+            input,
             decoding: Decoding {
                 threshold: config.detect_threshold,
                 nms_radius_px: config.detect_nms_px,
@@ -98,9 +145,9 @@ impl OnnxDetector {
 
     /// Resizes `image` into the input, runs `session` and decodes its output.
     fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Perception, DetectError> {
-        let fit = Letterbox::fit(image.width(), image.height(), self.input);
+        let fit = self.input.fit(image.width(), image.height());
         let tensor = input_tensor(image, fit);
-        let [w, h] = self.input;
+        let [w, h] = fit.input;
         let input = TensorRef::from_array_view(([1usize, 3, h, w], tensor.as_slice()))
             .map_err(|e| DetectError::Inference(e.to_string()))?;
         let outputs = session
