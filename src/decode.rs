@@ -92,6 +92,11 @@ fn turns_sideways(o: Orientation) -> bool {
 pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError> {
     let format = sniff(bytes)?;
     let (width, height) = dimensions(bytes)?;
+    if width == 0 || height == 0 {
+        return Err(DecodeError::Corrupt(format!(
+            "the header announces {width}x{height} pixels"
+        )));
+    }
     let pixels = width as u64 * height as u64;
     if pixels > max_pixels {
         return Err(DecodeError::TooManyPixels {

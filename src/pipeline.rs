@@ -91,38 +91,26 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     if let Some(points) = job.ends {
         engine::validate_ends(points, width, height)?;
     }
-    let frame = WorkingFrame::choose(width, height, job.params);
-    let image = frame.resample(&photo);
     let decode_ms = ms(t);
-    let t = Instant::now();
-    let seen = job.network.map(|n| n.detect(&image)).transpose()?;
-    let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
-    let ends = match (job.ends, &seen) {
-        (Some(points), _) => Ends::given(
-            &points
-                .iter()
-                .map(|&p| frame.working_point(p))
-                .collect::<Vec<_>>(),
-        ),
-        (None, Some(seen)) => Ends::detected(&seen.ends),
-        (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
-    };
-    let field = seen.as_ref().and_then(|s| s.field.as_ref());
-    let segmentation = engine::segment_with_confidence(
-        &image,
-        &ends.points,
-        &ends.confidences,
-        field,
-        job.params,
-    )?
-    .inphoto_point(&frame);
-    let ends = match job.ends {
-        Some(points) => Ends::given(points),
-        None => Ends {
-            points: ends.points.iter().map(|&p| frame.photo_point(p)).collect(),
-            ..ends
-        },
-    };
+    let frame = WorkingFrame::choose(width, height, job.params);
+    let mut pass = Pass::run(job, &photo, frame)?;
+    // Cables far wider or thinner than the engine's lengths suit (a closer or farther
+    // camera): once more at the scale that makes them nominal (README, "Any camera").
+    if let Some(k) = pass.segmentation.width_correction(&frame, job.params) {
+        let first = pass.timings;
+        pass = Pass::run(
+            job,
+            &photo,
+            WorkingFrame::corrected(width, height, job.params, k),
+        )?;
+        pass.timings.add(&first);
+    }
+    let Pass {
+        segmentation,
+        ends,
+        network_ran,
+        timings: pass_timings,
+    } = pass;
     let t = Instant::now();
     let mask_width = segmentation.mask_width(job.params.mask_width_px);
     let mask = render::render_mask(&segmentation, job.mask, mask_width);
@@ -139,15 +127,14 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     };
     let encode_ms = ms(t);
     let timings = Timings {
-        decode: decode_ms,
-        endpoints: network_ms,
+        decode: decode_ms + pass_timings.decode,
         mask: mask_ms,
         encode: encode_ms,
         total: ms(started),
-        ..segmentation.timings
+        ..pass_timings
     };
     Ok(Output {
-        network_ran: seen.is_some(),
+        network_ran,
         segmentation,
         ends,
         mask,
@@ -155,6 +142,63 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         overlay_png,
         timings,
     })
+}
+
+/// The network and the engine on the photo at one working size, the cables and ends
+/// mapped back to the photo's pixels.
+struct Pass {
+    segmentation: Segmentation,
+    ends: Ends,
+    network_ran: bool,
+    /// The engine's stages, `endpoints`, and `decode` = the resampling.
+    timings: Timings,
+}
+
+impl Pass {
+    fn run(job: &Job<'_>, photo: &RgbImage, frame: WorkingFrame) -> Result<Self, PipelineError> {
+        let t = Instant::now();
+        let image = frame.resample(photo);
+        let resample_ms = ms(t);
+        let t = Instant::now();
+        let seen = job.network.map(|n| n.detect(&image)).transpose()?;
+        let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
+        let ends = match (job.ends, &seen) {
+            (Some(points), _) => Ends::given(
+                &points
+                    .iter()
+                    .map(|&p| frame.working_point(p))
+                    .collect::<Vec<_>>(),
+            ),
+            (None, Some(seen)) => Ends::detected(&seen.ends),
+            (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
+        };
+        let field = seen.as_ref().and_then(|s| s.field.as_ref());
+        let segmentation = engine::segment_with_confidence(
+            &image,
+            &ends.points,
+            &ends.confidences,
+            field,
+            &frame.params(job.params),
+        )?
+        .into_photo(&frame);
+        let ends = match job.ends {
+            Some(points) => Ends::given(points),
+            None => Ends {
+                points: ends.points.iter().map(|&p| frame.photo_point(p)).collect(),
+                ..ends
+            },
+        };
+        Ok(Self {
+            timings: Timings {
+                decode: resample_ms,
+                endpoints: network_ms,
+                ..segmentation.timings
+            },
+            segmentation,
+            ends,
+            network_ran: seen.is_some(),
+        })
+    }
 }
 
 /// Encodes a mask as PNG.

@@ -33,6 +33,20 @@ pub struct Timings {
 }
 
 impl Timings {
+    /// Adds every stage of `other` (both passes of a photo segmented twice).
+    pub fn add(&mut self, other: &Timings) {
+        self.queue += other.queue;
+        self.decode += other.decode;
+        self.endpoints += other.endpoints;
+        self.superpixels += other.superpixels;
+        self.graph += other.graph;
+        self.walks += other.walks;
+        self.splines += other.splines;
+        self.mask += other.mask;
+        self.encode += other.encode;
+        self.total += other.total;
+    }
+
     /// Every stage but `queue` and `total` with its metric name, in pipeline order.
     pub fn stages(&self) -> [(&'static str, f64); 8] {
         [

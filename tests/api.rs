@@ -461,6 +461,136 @@ fn slow_request(app: &TestApp) -> reqwest::RequestBuilder {
     app.client.post(app.url("/segment")).multipart(f)
 }
 
+/// Careless or hostile requests are refused exactly: too many ends, media types that
+/// only start like an accepted one, repeated form parts or option keys, a header of
+/// zero pixels; a raw body sent as `application/octet-stream` is read like an image,
+/// and a caller's request id is kept only when it is safe to log.
+#[tokio::test(flavor = "multi_thread")]
+async fn hostile_inputs_are_refused_exactly() {
+    let app = spawn_app(|c| c.max_endpoints = 8).await;
+    let c = &app.client;
+    let post = |query: &str| c.post(app.url(&format!("/segment{query}")));
+
+    // Nine ends against a limit of eight: 422 before any work.
+    let nine = serde_json::to_string(&vec![[10.0, 10.0]; 9]).unwrap();
+    let body = expect_error(
+        post("")
+            .multipart(form(photo(), Some(nine)))
+            .send()
+            .await
+            .unwrap(),
+        422,
+        "too_many_endpoints",
+    )
+    .await;
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("limit of 8")
+    );
+    // The media type is matched whole, parameters aside.
+    expect_error(
+        post("")
+            .header("content-type", "image/jpegfoo")
+            .body(photo())
+            .send()
+            .await
+            .unwrap(),
+        415,
+        "unsupported_media_type",
+    )
+    .await;
+    let ends = ends_json();
+    let q = format!(
+        "?{}",
+        serde_urlencoded::to_string([("endpoints", ends.as_str())]).unwrap()
+    );
+    for content_type in ["image/jpeg; charset=binary", "application/octet-stream"] {
+        let response = post(&q)
+            .header("content-type", content_type)
+            .body(photo())
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(response.status(), 200, "{content_type}");
+    }
+    // A part given twice is an error naming it, not "last one wins".
+    let twice = form(photo(), Some(ends.clone())).text("endpoints", ends.clone());
+    let body = expect_error(
+        post("").multipart(twice).send().await.unwrap(),
+        400,
+        "bad_multipart",
+    )
+    .await;
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("`endpoints`")
+    );
+    let two_images = form(photo(), None).part("image", Part::bytes(photo()).file_name("b.jpg"));
+    let body = expect_error(
+        post("").multipart(two_images).send().await.unwrap(),
+        400,
+        "bad_multipart",
+    )
+    .await;
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("`image`")
+    );
+    let keys = form(photo(), Some(ends.clone())).text("options", r#"{"kappa": 1, "kappa": 3}"#);
+    let body = expect_error(
+        post("").multipart(keys).send().await.unwrap(),
+        400,
+        "bad_options",
+    )
+    .await;
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("`kappa` appears twice")
+    );
+    // A PNG header announcing 0 pixels of width.
+    let empty = ariadne_dlo::synth::png_header_only(0, 480);
+    expect_error(
+        post(&q)
+            .header("content-type", "image/png")
+            .body(empty)
+            .send()
+            .await
+            .unwrap(),
+        422,
+        "undecodable_image",
+    )
+    .await;
+    // Request ids: a safe one is echoed, one with quotes or spaces is replaced.
+    for (sent, kept) in [("cell-7/job:42", true), ("a\"b c", false)] {
+        let response = c
+            .get(app.url("/healthz"))
+            .header("x-request-id", sent)
+            .send()
+            .await
+            .unwrap();
+        let echoed = response.headers()["x-request-id"]
+            .to_str()
+            .unwrap()
+            .to_string();
+        assert_eq!(echoed == sent, kept, "{sent} -> {echoed}");
+    }
+    // And the server still answers.
+    let response = post("")
+        .multipart(form(photo(), Some(ends)))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+}
+
 #[tokio::test(flavor = "multi_thread")]
 async fn overload_is_answered_429_with_retry_after() {
     let app = spawn_app(|c| {

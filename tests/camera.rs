@@ -225,3 +225,41 @@ fn far_cables_half_as_wide_as_near_ones_are_all_found() {
     assert_found(&out, &truth, 6.0);
     assert!(mask_iou(&out, &truth.mask) > 0.6);
 }
+
+#[test]
+fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
+    // Cables 24 px wide at 640x480: a camera about 2.5 times closer than the one the
+    // engine's lengths suit. The first pass measures them and the photo is segmented
+    // again smaller; without the correction the masks are far too thin.
+    for seed in 1..=4 {
+        let truth = scene(&spec(640, 480, 24.0, seed));
+        let bytes = jpeg(&truth.image);
+        let out = run(&bytes, &truth.ends());
+        let scale = out.segmentation.working_scale;
+        assert!(
+            (0.3..0.75).contains(&scale),
+            "seed {seed}: working scale {scale}"
+        );
+        let fixed = pipeline::run(&Job {
+            bytes: &bytes,
+            ends: Some(&truth.ends()),
+            network: None,
+            params: &Params {
+                width_tolerance: 100.0,
+                ..Params::default()
+            },
+            max_pixels: u64::MAX,
+            mask: MaskKind::Binary,
+            overlay: false,
+            encode: false,
+        })
+        .unwrap();
+        assert_eq!(fixed.segmentation.working_scale, 1.0);
+        let corrected = mask_iou(&out, &truth.mask);
+        let uncorrected = mask_iou(&fixed, &truth.mask);
+        eprintln!(
+            "seed {seed}: mask IoU {corrected:.3} corrected, {uncorrected:.3} at the default scale"
+        );
+        assert!(corrected > 1.5 * uncorrected, "seed {seed}");
+    }
+}

@@ -100,6 +100,9 @@ pub struct ServeArgs {
     /// Largest accepted image, pixels (width × height, read from the header).
     #[arg(long, env = "ARIADNE_MAX_PIXELS", default_value_t = ServeConfig::default().max_pixels)]
     pub max_pixels: u64,
+    /// Most cable ends one request may give; more are answered 422.
+    #[arg(long, env = "ARIADNE_MAX_ENDPOINTS", default_value_t = ServeConfig::default().max_endpoints)]
+    pub max_endpoints: usize,
     /// Seconds `Retry-After` asks rejected clients to wait.
     #[arg(long, env = "ARIADNE_RETRY_AFTER_S", default_value_t = ServeConfig::default().retry_after_s)]
     pub retry_after_s: u64,
@@ -130,6 +133,7 @@ impl From<ServeArgs> for ServeConfig {
             deadline_ms: a.deadline_ms,
             max_body_bytes: a.max_body_bytes,
             max_pixels: a.max_pixels,
+            max_endpoints: a.max_endpoints,
             retry_after_s: a.retry_after_s,
             presets: a.presets,
             log_format: a.log_format,
@@ -205,6 +209,11 @@ pub struct EvalArgs {
     /// another resolution), one evaluation each, e.g. `0.5,1,2`.
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pub scale: Vec<f64>,
+    /// Magnify every photo: its central 1/zoom cropped and enlarged back to the frame's
+    /// size (a camera closer to the table: cables look wider), with its masks and
+    /// terminals.
+    #[arg(long, default_value_t = 1.0)]
+    pub zoom: f64,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

@@ -91,6 +91,12 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             );
         }
     };
+    if !(1.0..=8.0).contains(&args.zoom) {
+        return Err(CliError::BadOptions(format!(
+            "--zoom {}: expected a factor in [1, 8]",
+            args.zoom
+        )));
+    }
     let mut images = Vec::new();
     let mut scales = Vec::new();
     for &scale in &args.scale {
@@ -102,7 +108,10 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
         let setup = eval::Setup {
             network: Some(&network),
             ends,
-            scale,
+            camera: eval::Camera {
+                scale,
+                zoom: args.zoom,
+            },
         };
         let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;
         scales.push((scale, eval::summarise(&results)));

@@ -116,7 +116,9 @@ pub struct DetectorConfig {
     pub model: PathBuf,
     /// Output convention of the model.
     pub model_kind: ModelKind,
-    /// Network input width; the photo is resized to fit, keeping its aspect ratio.
+    /// Network input width for a 640x480 photo. A model with free input sides gets
+    /// every photo at that scale in its own shape, padded to the kind's stride; a model
+    /// that declares its size gets that size, the photo fitted keeping its aspect ratio.
     pub model_input_width: usize,
     /// Network input height.
     pub model_input_height: usize,

@@ -15,6 +15,9 @@ use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception
 
 /// File name of the ONNX Runtime library this build is made for.
 const RUNTIME_FILE: &str = "libonnxruntime.so.1.31.1";
+/// The photo size (640x480) the configured input size of a model with free input
+/// sides is meant for: working images of other sizes are scaled alike.
+const REFERENCE_PIXELS: f64 = 640.0 * 480.0;
 /// Grey the padding of a letterboxed input is filled with.
 const PAD: f32 = 0.5;
 
@@ -38,11 +41,11 @@ pub fn default_runtime_candidates() -> Vec<PathBuf> {
 enum InputSize {
     /// The model declares its width and height: the photo is letterboxed into them.
     Fixed([usize; 2]),
-    /// The model takes any multiple of `stride`: the photo is scaled to about `area`
-    /// pixels whatever its aspect ratio (portrait or landscape alike), then padded.
+    /// The model takes any multiple of `stride`: the photo is scaled by `scale`
+    /// whatever its size and aspect ratio (portrait or landscape alike), then padded.
     Dynamic {
-        /// Pixels of the scaled photo (the configured input width × height).
-        area: usize,
+        /// Input pixels per photo pixel: the configured input's for a 640x480 photo.
+        scale: f64,
         /// Both sides are padded to a multiple of this.
         stride: usize,
     },
@@ -50,7 +53,7 @@ enum InputSize {
 
 impl InputSize {
     /// The size declared by `session`'s first input (`[1, 3, H, W]`, a dimension < 1
-    /// being free), else the configured area at the model kind's stride.
+    /// being free), else the configured size's scale at the model kind's stride.
     fn of(session: &Session, config: &DetectorConfig) -> Self {
         let declared = session
             .inputs()
@@ -61,7 +64,9 @@ impl InputSize {
         match declared[..] {
             [_, _, h, w] if h > 0 && w > 0 => Self::Fixed([w as usize, h as usize]),
             _ => Self::Dynamic {
-                area: config.model_input_width * config.model_input_height,
+                scale: ((config.model_input_width * config.model_input_height) as f64
+                    / REFERENCE_PIXELS)
+                    .sqrt(),
                 stride: config.model_kind.stride(),
             },
         }
@@ -71,7 +76,7 @@ impl InputSize {
     fn fit(self, width: u32, height: u32) -> Letterbox {
         match self {
             Self::Fixed(input) => Letterbox::fit(width, height, input),
-            Self::Dynamic { area, stride } => Letterbox::fit_area(width, height, area, stride),
+            Self::Dynamic { scale, stride } => Letterbox::fit_scaled(width, height, scale, stride),
         }
     }
 }

@@ -33,10 +33,9 @@ impl Letterbox {
     }
 
     /// The fit of a `width` x `height` photo into an input of its own shape: the photo
-    /// scaled to about `area` pixels, keeping its aspect ratio, and padded on the right
-    /// and bottom to multiples of `stride` (a fully convolutional model of any size).
-    pub fn fit_area(width: u32, height: u32, area: usize, stride: usize) -> Self {
-        let s = (area as f64 / (width as f64 * height as f64)).sqrt();
+    /// scaled by `s`, and the input padded on the right and bottom to multiples of
+    /// `stride` (a fully convolutional model of any size).
+    pub fn fit_scaled(width: u32, height: u32, s: f64, stride: usize) -> Self {
         let pad = |v: u32| {
             let scaled = ((v as f64 * s).round() as usize).max(1);
             scaled.div_ceil(stride) * stride
@@ -190,15 +189,15 @@ fn suppress(mut found: Vec<Detection>, radius: f64) -> Vec<Detection> {
 #[cfg(test)]
 mod tests {
     #[test]
-    fn a_free_input_takes_the_photo_shape_at_the_same_area() {
-        let landscape = Letterbox::fit_area(640, 480, 320 * 240, 4);
+    fn a_free_input_takes_the_photo_shape_at_the_same_scale() {
+        let landscape = Letterbox::fit_scaled(640, 480, 0.5, 4);
         assert_eq!(landscape.input, [320, 240]);
         // Portrait: the same scale (half), not squeezed into a landscape box.
-        let portrait = Letterbox::fit_area(480, 640, 320 * 240, 4);
+        let portrait = Letterbox::fit_scaled(480, 640, 0.5, 4);
         assert_eq!(portrait.input, [240, 320]);
         assert_eq!(portrait.scale_x, 0.5);
         // Sides that are no multiple of the stride are padded up to one.
-        let odd = Letterbox::fit_area(1000, 300, 320 * 240, 32);
+        let odd = Letterbox::fit_scaled(1000, 300, 0.506, 32);
         assert_eq!(odd.input, [512, 160]);
         assert_eq!(odd.resized(), [512, 154]);
     }

@@ -1,10 +1,15 @@
-//! The working resolution. The engine's lengths (superpixel density, step lengths,
-//! radii, mask width) are in pixels and suit a photo of a work cell of about 640x480,
-//! where cables are 8-14 px wide. A photo of another size is resampled to about
+//! The working resolution. The engine's lengths (step lengths, radii, mask width) are
+//! in pixels and suit cables about [`Params::nominal_width_px`] wide, as in a photo of a
+//! work cell at 640x480. A photo of another size is resampled to about
 //! [`Params::working_pixels`] pixels (enlarged at most [`Params::max_upscale`] times),
-//! segmented there, and its cables are mapped back to the photo's pixels.
+//! segmented there, and its cables are mapped back to the photo's pixels. When the
+//! cables found there are much wider or thinner than nominal (a camera closer to the
+//! table or farther from it), the photo is segmented once more at the scale that makes
+//! them nominal ([`Segmentation::width_correction`]); superpixels keep their size in
+//! working pixels ([`WorkingFrame::params`]).
 
 use std::borrow::Cow;
+use std::cmp::Ordering;
 
 use image::{RgbImage, imageops};
 
@@ -26,9 +31,14 @@ pub struct WorkingFrame {
 impl WorkingFrame {
     /// The working size of a `width` x `height` photo under `params`.
     pub fn choose(width: u32, height: u32, params: &Params) -> Self {
+        Self::corrected(width, height, params, 1.0)
+    }
+
+    /// [`Self::choose`] with the scale multiplied by `correction` (from
+    /// [`Segmentation::width_correction`]).
+    pub fn corrected(width: u32, height: u32, params: &Params, correction: f64) -> Self {
         let pixels = width as f64 * height as f64;
-        let scale = (params.working_pixels as f64 / pixels.max(1.0))
-            .sqrt()
+        let scale = ((params.working_pixels as f64 / pixels.max(1.0)).sqrt() * correction)
             .min(params.max_upscale as f64);
         let side = |v: u32| {
             let scaled = (v as f64 * scale).round().max(1.0) as u32;
@@ -55,6 +65,22 @@ impl WorkingFrame {
     pub fn scale(&self) -> f32 {
         let [sx, sy] = self.factors();
         (sx * sy).sqrt() as f32
+    }
+
+    /// `params` for this frame: the superpixel count scaled with the working image's
+    /// area, so that superpixels keep the size they have in a `working_pixels` image
+    /// (a zoomed photo, segmented smaller, gets fewer of them).
+    pub fn params<'a>(&self, params: &'a Params) -> Cow<'a, Params> {
+        let area = self.working[0] as f64 * self.working[1] as f64;
+        let share = area / params.working_pixels as f64;
+        if (share - 1.0).abs() < SAME_SIZE {
+            return Cow::Borrowed(params);
+        }
+        let n = (params.n_segments as f64 * share).round().max(16.0);
+        Cow::Owned(Params {
+            n_segments: n.min(20_000.0) as u32,
+            ..params.clone()
+        })
     }
 
     /// True when the photo is segmented at its own size.
@@ -133,7 +159,7 @@ fn box_shrink(src: &RgbImage, w: u32, h: u32) -> RgbImage {
 impl Segmentation {
     /// These cables, found in the working image of `frame`, in the photo's pixels:
     /// points, splines (an affine map moves control points alone), lengths, widths.
-    pub fn inphoto_point(mut self, frame: &WorkingFrame) -> Self {
+    pub fn into_photo(mut self, frame: &WorkingFrame) -> Self {
         if frame.is_identity() {
             return self;
         }
@@ -152,6 +178,27 @@ impl Segmentation {
         [self.width, self.height] = frame.photo;
         self.working_scale = scale;
         self
+    }
+
+    /// The factor to multiply the working scale by so that these cables (in photo
+    /// pixels, found at `frame`) would be [`Params::nominal_width_px`] wide: `None`
+    /// when their median width is within [`Params::width_tolerance`] of nominal, or
+    /// when there is no cable to measure. Bounded to 0.25..=2.
+    pub fn width_correction(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
+        let mut widths: Vec<f32> = self
+            .cables
+            .iter()
+            .map(|c| c.width_px * frame.scale())
+            .filter(|w| w.is_finite() && *w > 0.0)
+            .collect();
+        if widths.is_empty() {
+            return None;
+        }
+        widths.sort_by(|a, b| a.partial_cmp(b).unwrap_or(Ordering::Equal));
+        let median = widths[widths.len() / 2] as f64;
+        let ratio = params.nominal_width_px as f64 / median;
+        let tolerance = params.width_tolerance as f64;
+        (ratio > tolerance || ratio < 1.0 / tolerance).then(|| ratio.clamp(0.25, 2.0))
     }
 
     /// The mask stroke width in the photo's pixels for `mask_width_px` working pixels

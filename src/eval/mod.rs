@@ -7,7 +7,7 @@ mod view;
 
 pub use dataset::{DatasetError, Sample, default_dataset_dir, load_dataset, terminal_ends};
 pub use metrics::{SetSummary, iou, match_cables, match_points, summarise};
-pub use view::View;
+pub use view::{Camera, View};
 
 use image::GrayImage;
 use serde::Serialize;
@@ -29,6 +29,8 @@ pub struct ImageResult {
     pub name: String,
     /// Factor the photo, its masks and its terminals were resized by.
     pub scale: f64,
+    /// Magnification of the photo (its centre cropped and enlarged).
+    pub zoom: f64,
     /// Cables in the ground truth.
     pub gt_cables: usize,
     /// Cables found.
@@ -43,7 +45,8 @@ pub struct ImageResult {
     pub ends: usize,
     /// True terminals (centreline ends off the border).
     pub terminals: usize,
-    /// Ends within [`TERMINAL_MATCH_PX`] (times the scale) of a true terminal, one-to-one.
+    /// Ends within [`TERMINAL_MATCH_PX`] (times the scale and zoom) of a true terminal,
+    /// one-to-one.
     pub terminals_matched: usize,
     /// Milliseconds per stage (no encoding: the mask is scored directly; `total` is
     /// the pipeline's time).
@@ -69,9 +72,8 @@ pub struct Setup<'a> {
     pub network: Option<&'a dyn EndpointDetector>,
     /// Where the ends come from.
     pub ends: EndsFrom,
-    /// Factor every photo is resized by, with its masks and terminals (a camera of
-    /// another resolution); 1 reads the files as they are.
-    pub scale: f64,
+    /// The camera the photos are made for (the default reads the files as they are).
+    pub camera: Camera,
 }
 
 /// Segments `sample` with the pipeline as `setup` says, and scores it.
@@ -80,7 +82,7 @@ pub fn evaluate_sample(
     params: &Params,
     setup: Setup<'_>,
 ) -> Result<ImageResult, DatasetError> {
-    let view = View::of(sample, setup.scale)?;
+    let view = View::of(sample, setup.camera)?;
     let (w, h) = view.size;
     let terminals = &view.terminals;
     let out = pipeline::run(&pipeline::Job {
@@ -107,8 +109,9 @@ pub fn evaluate_sample(
     Ok(ImageResult {
         set: sample.set.clone(),
         name: sample.name.clone(),
-        scale: setup.scale,
-        gt_cables: sample.cables.len(),
+        scale: setup.camera.scale,
+        zoom: setup.camera.zoom,
+        gt_cables: view.cable_masks.len(),
         found_cables: seg.cables.len(),
         matched_cables,
         matched_iou_sum,
@@ -118,7 +121,7 @@ pub fn evaluate_sample(
         terminals_matched: match_points(
             &out.ends.points,
             terminals,
-            TERMINAL_MATCH_PX * setup.scale,
+            TERMINAL_MATCH_PX * setup.camera.scale * setup.camera.zoom,
         ),
         timings_ms: out.timings,
     })

@@ -1,75 +1,125 @@
-//! A sample as a camera of another resolution would see it: the photo, its masks and
-//! its terminals resized together by one factor.
+//! A sample as another camera would see it: of another resolution (the photo, its
+//! masks and its terminals resized together) or closer (the centre of the frame
+//! cropped and enlarged back to the frame's size, so cables look wider).
 
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
-use super::dataset::{DatasetError, Sample, terminal_ends};
+use super::dataset::{BORDER_TOLERANCE_PX, DatasetError, Sample, terminal_ends};
 
-/// What the evaluation of one sample reads, at one scale.
+/// How the evaluated photos are made from the dataset's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Factor the (cropped) photo's size is multiplied by: a sensor of more or fewer
+    /// pixels over the same field of view.
+    pub scale: f64,
+    /// Magnification: the central 1/zoom of the frame, each way, is kept (a camera
+    /// closer to the table); 1 keeps the whole frame.
+    pub zoom: f64,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            scale: 1.0,
+            zoom: 1.0,
+        }
+    }
+}
+
+/// What the evaluation of one sample reads, for one camera.
 pub struct View {
-    /// The photo file: the original at scale 1, else the resized photo as PNG.
+    /// The photo file: the original for the default camera, else the made photo as PNG.
     pub bytes: Vec<u8>,
     /// Width and height of the photo.
     pub size: (u32, u32),
     /// The union mask.
     pub mask_all: GrayImage,
-    /// One mask per cable.
+    /// One mask per cable in view.
     pub cable_masks: Vec<GrayImage>,
-    /// The true terminals (found at the original size, then scaled).
+    /// The true terminals: those of the whole photo in view, off the view's border by
+    /// the border tolerance (in the dataset's pixels).
     pub terminals: Vec<[f64; 2]>,
 }
 
 impl View {
-    /// `sample` resized by `scale` (1: as it is, bytes untouched). The photo is
-    /// enlarged with Catmull-Rom (sharp, as a finer sensor would see it) and shrunk
-    /// with a triangle filter (averaging, as a coarser one would); masks are resampled
-    /// with a triangle filter and thresholded at half.
-    pub fn of(sample: &Sample, scale: f64) -> Result<Self, DatasetError> {
+    /// `sample` as `camera` sees it (the default camera: as it is, bytes untouched).
+    /// The photo is enlarged with Catmull-Rom (sharp, as a finer sensor would see it)
+    /// and shrunk with a triangle filter (averaging, as a coarser one would); masks are
+    /// resampled with a triangle filter and thresholded at half; a cable whose mask
+    /// leaves the view is dropped from the truth.
+    pub fn of(sample: &Sample, camera: Camera) -> Result<Self, DatasetError> {
         let path = &sample.image;
         let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
         let image_err = |e: String| DatasetError::Image(path.clone(), e);
         let (w, h) = crate::decode::dimensions(&bytes).map_err(|e| image_err(e.to_string()))?;
-        let terminals = terminal_ends(&sample.cables, w, h);
         let (mask_all, cable_masks) = (sample.mask_all()?, sample.cable_masks()?);
-        if scale == 1.0 {
+        if camera == Camera::default() {
             return Ok(Self {
                 bytes,
+                terminals: terminal_ends(&sample.cables, w, h),
                 size: (w, h),
                 mask_all,
                 cable_masks,
-                terminals,
             });
         }
-        let size = (
-            ((w as f64 * scale).round() as u32).max(1),
-            ((h as f64 * scale).round() as u32).max(1),
+        // The crop, centred, and the size it is resampled to.
+        let (cw, ch) = (
+            ((w as f64 / camera.zoom).round() as u32).clamp(1, w),
+            ((h as f64 / camera.zoom).round() as u32).clamp(1, h),
         );
+        let (x0, y0) = ((w - cw) / 2, (h - ch) / 2);
+        let size = (
+            ((w as f64 * camera.scale).round() as u32).max(1),
+            ((h as f64 * camera.scale).round() as u32).max(1),
+        );
+        let (fx, fy) = (size.0 as f64 / cw as f64, size.1 as f64 / ch as f64);
         let photo = image::load_from_memory(&bytes).map_err(|e| image_err(e.to_string()))?;
-        let filter = if scale > 1.0 {
+        let photo = imageops::crop_imm(&photo.into_rgb8(), x0, y0, cw, ch).to_image();
+        let filter = if fx > 1.0 {
             imageops::FilterType::CatmullRom
         } else {
             imageops::FilterType::Triangle
         };
-        let resized = imageops::resize(&photo.into_rgb8(), size.0, size.1, filter);
+        let resized = imageops::resize(&photo, size.0, size.1, filter);
         let mut png = std::io::Cursor::new(Vec::new());
         resized
             .write_to(&mut png, ImageFormat::Png)
             .map_err(|e| image_err(e.to_string()))?;
         let mask = |m: &GrayImage| {
-            let mut out = imageops::resize(m, size.0, size.1, imageops::FilterType::Triangle);
+            let crop = imageops::crop_imm(m, x0, y0, cw, ch).to_image();
+            let mut out = imageops::resize(&crop, size.0, size.1, imageops::FilterType::Triangle);
             out.pixels_mut()
                 .for_each(|p| *p = Luma([if p[0] > 127 { 255 } else { 0 }]));
             out
         };
+        // The terminals of the whole photo that lie in the crop, off its border.
+        let tol = BORDER_TOLERANCE_PX as f64;
+        let in_view = |p: &[f64; 2]| {
+            p[0] >= x0 as f64 + tol
+                && p[1] >= y0 as f64 + tol
+                && p[0] <= (x0 + cw) as f64 - 1.0 - tol
+                && p[1] <= (y0 + ch) as f64 - 1.0 - tol
+        };
+        let terminals = terminal_ends(&sample.cables, w, h)
+            .into_iter()
+            .filter(in_view)
+            .map(|p| {
+                [
+                    (p[0] - x0 as f64 + 0.5) * fx - 0.5,
+                    (p[1] - y0 as f64 + 0.5) * fy - 0.5,
+                ]
+            })
+            .collect();
         Ok(Self {
             bytes: png.into_inner(),
             size,
             mask_all: mask(&mask_all),
-            cable_masks: cable_masks.iter().map(mask).collect(),
-            terminals: terminals
+            cable_masks: cable_masks
                 .iter()
-                .map(|p| p.map(|v| (v + 0.5) * scale - 0.5))
+                .map(mask)
+                .filter(|m| m.pixels().any(|p| p[0] > 0))
                 .collect(),
+            terminals,
         })
     }
 }

@@ -1,5 +1,7 @@
 //! Reading the body of `POST /segment`: a multipart form (`image`, optional
-//! `endpoints` and `options`) or a raw JPEG/PNG.
+//! `endpoints` and `options`, each at most once) or a raw JPEG/PNG. Media types are
+//! matched exactly (parameters allowed); `application/octet-stream` is read as a raw
+//! image whose format the decoder tells from its bytes.
 
 use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Request};
@@ -29,6 +31,7 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
         .and_then(|v| v.to_str().ok())
         .unwrap_or("")
         .to_ascii_lowercase();
+    let media_type = content_type.split(';').next().unwrap_or("").trim();
     if let Some(len) = request
         .headers()
         .get(header::CONTENT_LENGTH)
@@ -38,7 +41,7 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
         metrics::reject("body_too_large");
         return Err(too_large_body(state.config.max_body_bytes));
     }
-    if content_type.starts_with("multipart/form-data") {
+    if media_type == "multipart/form-data" {
         let mut form = Multipart::from_request(request, state)
             .await
             .map_err(|e| ApiError::bad_request(ErrorCode::BadMultipart, e.body_text()))?;
@@ -50,6 +53,23 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
                 Err(e) => return Err(multipart_error(state, e)),
             };
             let name = field.name().unwrap_or("").to_string();
+            let seen = match name.as_str() {
+                "image" => image.is_some(),
+                "endpoints" => ends.is_some(),
+                "options" => options.is_some(),
+                other => {
+                    return Err(ApiError::bad_request(
+                        ErrorCode::BadMultipart,
+                        format!("unknown form part `{other}` (expected image, endpoints, options)"),
+                    ));
+                }
+            };
+            if seen {
+                return Err(ApiError::bad_request(
+                    ErrorCode::BadMultipart,
+                    format!("the form has more than one `{name}` part; give it once"),
+                ));
+            }
             match name.as_str() {
                 "image" => {
                     image = Some(field.bytes().await.map_err(|e| multipart_error(state, e))?)
@@ -57,21 +77,9 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
                 "endpoints" => {
                     ends = Some(field.text().await.map_err(|e| multipart_error(state, e))?)
                 }
-                "options" => {
+                _ => {
                     let text = field.text().await.map_err(|e| multipart_error(state, e))?;
-                    let map: Map<String, Value> = serde_json::from_str(&text).map_err(|e| {
-                        ApiError::bad_request(
-                            ErrorCode::BadOptions,
-                            format!("`options` must be a JSON object: {e}"),
-                        )
-                    })?;
-                    options = Some(map);
-                }
-                other => {
-                    return Err(ApiError::bad_request(
-                        ErrorCode::BadMultipart,
-                        format!("unknown form part `{other}` (expected image, endpoints, options)"),
-                    ));
+                    options = Some(parse_options(&text)?);
                 }
             }
         }
@@ -90,7 +98,10 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
             options,
         });
     }
-    if content_type.starts_with("image/jpeg") || content_type.starts_with("image/png") {
+    if matches!(
+        media_type,
+        "image/jpeg" | "image/png" | "application/octet-stream"
+    ) {
         let body = Bytes::from_request(request, state)
             .await
             .map_err(|e| body_error(state, e.status(), e.body_text(), ErrorCode::BadBody))?;
@@ -107,8 +118,50 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
         });
     }
     Err(ApiError::UnsupportedMediaType(format!(
-        "unsupported Content-Type `{content_type}`: send multipart/form-data with an `image` part, or the raw image as image/jpeg or image/png"
+        "unsupported Content-Type `{content_type}`: send multipart/form-data with an `image` part, or the raw image as image/jpeg, image/png or application/octet-stream"
     )))
+}
+
+/// The `options` part: a JSON object, each key at most once.
+fn parse_options(text: &str) -> Result<Map<String, Value>, ApiError> {
+    let bad = |message: String| ApiError::bad_request(ErrorCode::BadOptions, message);
+    let UniqueKeys(map) = serde_json::from_str(text).map_err(|e| {
+        bad(format!(
+            "`options` must be a JSON object, each key once: {e}"
+        ))
+    })?;
+    Ok(map)
+}
+
+/// A JSON object whose keys are all different (serde_json would keep the last of two).
+struct UniqueKeys(Map<String, Value>);
+
+impl<'de> serde::Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = UniqueKeys;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut access: A,
+            ) -> Result<UniqueKeys, A::Error> {
+                let mut map = Map::new();
+                while let Some((key, value)) = access.next_entry::<String, Value>()? {
+                    if map.contains_key(&key) {
+                        return Err(serde::de::Error::custom(format_args!(
+                            "key `{key}` appears twice"
+                        )));
+                    }
+                    map.insert(key, value);
+                }
+                Ok(UniqueKeys(map))
+            }
+        }
+        deserializer.deserialize_map(Visitor)
+    }
 }
 
 fn too_large_body(limit: usize) -> ApiError {

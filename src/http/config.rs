@@ -44,6 +44,8 @@ pub struct ServeConfig {
     pub max_body_bytes: usize,
     /// Largest accepted image, pixels (width × height, read from the header).
     pub max_pixels: u64,
+    /// Most cable ends one request may give; more are answered 422.
+    pub max_endpoints: usize,
     /// Seconds `Retry-After` asks rejected clients to wait.
     pub retry_after_s: u64,
     /// JSON file of extra or overriding presets.
@@ -67,6 +69,7 @@ impl Default for ServeConfig {
             deadline_ms: 10_000,
             max_body_bytes: 16 * 1024 * 1024,
             max_pixels: 16_000_000,
+            max_endpoints: 256,
             retry_after_s: 1,
             presets: None,
             log_format: LogFormat::Text,

@@ -42,6 +42,8 @@ pub enum ErrorCode {
     UndecodableImage,
     /// 422: an end lies outside the image or is not finite.
     EndpointOutsideImage,
+    /// 422: more cable ends than `--max-endpoints`.
+    TooManyEndpoints,
     /// 422: an option is out of its range.
     OptionOutOfRange,
     /// 422: the image is too small to segment.
@@ -75,6 +77,7 @@ impl ErrorCode {
             Self::UnsupportedMediaType => "unsupported_media_type",
             Self::UndecodableImage => "undecodable_image",
             Self::EndpointOutsideImage => "endpoint_outside_image",
+            Self::TooManyEndpoints => "too_many_endpoints",
             Self::OptionOutOfRange => "option_out_of_range",
             Self::ImageTooSmall => "image_too_small",
             Self::QueueFull => "queue_full",

@@ -99,11 +99,12 @@ enum Output {
     path = "/segment",
     params(SegmentQuery),
     request_body(
-        description = "The photo: multipart form, or the raw JPEG/PNG as the body",
+        description = "The photo: multipart form (each part at most once), or the raw JPEG/PNG as the body (application/octet-stream: the format is read from the bytes)",
         content(
             (SegmentForm = "multipart/form-data"),
             (ImageBytes = "image/jpeg"),
             (ImageBytes = "image/png"),
+            (ImageBytes = "application/octet-stream"),
         )
     ),
     responses(
@@ -111,10 +112,10 @@ enum Output {
             (SegmentResponse = "application/json"),
             (ImageBytes = "image/png"),
         )),
-        (status = 400, description = "Malformed request: no image part, bad JSON in a part, bad query value", body = ErrorBody),
+        (status = 400, description = "Malformed request: no image part, a part or option key given twice, bad JSON in a part, bad query value", body = ErrorBody),
         (status = 413, description = "Body or pixel count over the limit", body = ErrorBody),
         (status = 415, description = "Not JPEG, PNG or multipart", body = ErrorBody),
-        (status = 422, description = "Undecodable or truncated image, ends outside the image, options out of range", body = ErrorBody),
+        (status = 422, description = "Undecodable or truncated image, ends outside the image or more than --max-endpoints, options out of range", body = ErrorBody),
         (status = 429, description = "Queue full; see Retry-After", body = ErrorBody),
         (status = 500, description = "Bug; the server stays up", body = ErrorBody),
         (status = 504, description = "Deadline exceeded", body = ErrorBody),
@@ -217,6 +218,17 @@ fn parse(
         })?),
         None => None,
     };
+    let limit = state.config.max_endpoints;
+    if let Some(ends) = ends.as_ref().filter(|e| e.len() > limit) {
+        metrics::reject("too_many_endpoints");
+        return Err(ApiError::Unprocessable {
+            code: ErrorCode::TooManyEndpoints,
+            message: format!(
+                "{} cable ends given, over the limit of {limit} per request",
+                ends.len()
+            ),
+        });
+    }
     let preset = query.preset.as_deref().unwrap_or("default");
     let base = state.presets.get(preset).ok_or_else(|| {
         ApiError::bad_request(

@@ -18,7 +18,7 @@ pub fn split_iou(network: Option<&dyn EndpointDetector>, ends: eval::EndsFrom) -
     let setup = eval::Setup {
         network,
         ends,
-        scale: 1.0,
+        camera: eval::Camera::default(),
     };
     let results = eval::evaluate_all(&samples, &simple, &hard, setup, |_| {}).unwrap();
     (

@@ -38,6 +38,12 @@ pub struct Params {
     pub working_pixels: u32,
     /// Largest enlargement of a small photo to reach `working_pixels`.
     pub max_upscale: f32,
+    /// Cable width the lengths suit, working pixels (the median measured on the
+    /// development photos at 640x480).
+    pub nominal_width_px: f32,
+    /// The photo is segmented again at a corrected scale when the median cable width
+    /// is off nominal by more than this factor (a closer or farther camera).
+    pub width_tolerance: f32,
 
     // --- graph ---
     /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
@@ -221,6 +227,8 @@ impl Default for Params {
             min_size_factor: 0.25,
             working_pixels: 307_200,
             max_upscale: 2.0,
+            nominal_width_px: 8.5,
+            width_tolerance: 1.4,
             hist_bins: 4,
             neighbourhood_order: 3,
             jump_order: 5,

@@ -34,6 +34,8 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("min_size_factor", 0.0, 1.0),
     ("working_pixels", 20_000.0, 4_000_000.0),
     ("max_upscale", 1.0, 4.0),
+    ("nominal_width_px", 1.0, 100.0),
+    ("width_tolerance", 1.0, 100.0),
     ("hist_bins", 1.0, 16.0),
     ("neighbourhood_order", 1.0, 8.0),
     ("jump_order", 1.0, 12.0),
