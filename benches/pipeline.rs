@@ -101,6 +101,7 @@ fn segment_with_detection_by_size(bencher: divan::Bencher, size: (u32, u32)) {
             mask: MaskKind::Binary,
             overlay: false,
             encode: true,
+            deadline: ariadne_dlo::engine::Deadline::NONE,
         })
         .unwrap()
     });
@@ -134,6 +135,7 @@ fn bench_segment(bencher: divan::Bencher, detector: Option<&dyn EndpointDetector
             mask: MaskKind::Binary,
             overlay: false,
             encode: true,
+            deadline: ariadne_dlo::engine::Deadline::NONE,
         })
         .unwrap()
     });

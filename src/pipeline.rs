@@ -15,7 +15,7 @@ use thiserror::Error;
 use crate::decode::{self, DecodeError};
 use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{
-    self, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, render,
+    self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, render,
 };
 use crate::timings::{Timings, ms_since as ms};
 
@@ -38,6 +38,8 @@ pub struct Job<'a> {
     pub overlay: bool,
     /// Encode the mask (and overlay) as PNG; the evaluator reads the mask directly.
     pub encode: bool,
+    /// When to give up (the engine checks it between its steps).
+    pub deadline: Deadline,
 }
 
 /// A job without ends needs a network.
@@ -179,6 +181,7 @@ impl Pass {
             &ends.confidences,
             field,
             &frame.params(job.params),
+            job.deadline,
         )?
         .into_photo(&frame);
         let ends = match job.ends {
@@ -272,6 +275,7 @@ mod tests {
             mask: MaskKind::Labels,
             overlay: true,
             encode: true,
+            deadline: Deadline::NONE,
         })
         .unwrap();
         // The same cables as the engine on the decoded photo (PNG is lossless).

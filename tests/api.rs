@@ -456,8 +456,10 @@ fn slow_request(app: &TestApp) -> reqwest::RequestBuilder {
         image::ImageFormat::Jpeg,
     )
     .unwrap();
-    let f = form(jpeg, Some("[[400, 400]]".into()))
-        .text("options", r#"{"slic_iterations": 50, "n_segments": 8000}"#);
+    let f = form(jpeg, Some("[[400, 400]]".into())).text(
+        "options",
+        r#"{"slic_iterations": 50, "n_segments": 8000, "working_pixels": 2764800}"#,
+    );
     app.client.post(app.url("/segment")).multipart(f)
 }
 
@@ -633,6 +635,29 @@ async fn deadline_gives_504() {
     expect_error(response, 504, "deadline_exceeded").await;
     // The server is fine afterwards.
     assert_eq!(app.get_status("/healthz").await, 200);
+}
+
+/// Work past the deadline is abandoned, not only its answer: with one worker, a request
+/// that would run for seconds gets its 504 and the next request is served at once.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_request_past_its_deadline_frees_its_worker() {
+    let app = spawn_app(|c| {
+        c.workers = Some(1);
+        c.deadline_ms = 300;
+    })
+    .await;
+    let started = std::time::Instant::now();
+    let response = slow_request(&app).send().await.unwrap();
+    expect_error(response, 504, "deadline_exceeded").await;
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .multipart(form(photo(), Some(ends_json())))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200, "the worker was still busy");
+    assert!(started.elapsed() < std::time::Duration::from_millis(1500));
 }
 
 #[tokio::test(flavor = "multi_thread")]

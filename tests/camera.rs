@@ -52,6 +52,7 @@ fn run(bytes: &[u8], ends: &[[f64; 2]]) -> Output {
         mask: MaskKind::Binary,
         overlay: false,
         encode: false,
+        deadline: ariadne_dlo::engine::Deadline::NONE,
     })
     .unwrap()
 }
@@ -252,6 +253,7 @@ fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
             mask: MaskKind::Binary,
             overlay: false,
             encode: false,
+            deadline: ariadne_dlo::engine::Deadline::NONE,
         })
         .unwrap();
         assert_eq!(fixed.segmentation.working_scale, 1.0);

@@ -77,6 +77,7 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
             mask: MaskKind::Binary,
             overlay: false,
             encode: false,
+            deadline: ariadne_dlo::engine::Deadline::NONE,
         })
         .unwrap();
         let (w, h) = scene.image.dimensions();

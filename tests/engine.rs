@@ -210,9 +210,15 @@ fn an_exact_field_recovers_the_hard_cases() {
         let field = field_from_mask(&s.mask);
         let ends = s.terminals();
         let confidences = vec![1.0; ends.len()];
-        let seg =
-            engine::segment_with_confidence(&s.image, &ends, &confidences, Some(&field), &params)
-                .unwrap();
+        let seg = engine::segment_with_confidence(
+            &s.image,
+            &ends,
+            &confidences,
+            Some(&field),
+            &params,
+            engine::Deadline::NONE,
+        )
+        .unwrap();
         let err: Vec<f32> = s
             .cables
             .iter()

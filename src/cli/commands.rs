@@ -27,6 +27,7 @@ pub fn segment(args: SegmentArgs) -> Result<(), CliError> {
         mask: args.mask_kind.into(),
         overlay: args.overlay.is_some(),
         encode: true,
+        deadline: crate::engine::Deadline::NONE,
     })
     .map_err(|e| CliError::Image(args.image.clone(), e))?;
     if let (Some(path), Some(png)) = (&args.mask, &out.mask_png) {

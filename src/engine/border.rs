@@ -6,7 +6,6 @@
 //! seed on the border, and only walks that cross the image to another border point
 //! count from it.
 
-use super::Params;
 use super::cable::{Cable, Scene, model_cable};
 use super::field::CableField;
 use super::geometry::{dist3, median};
@@ -14,6 +13,7 @@ use super::graph::Graph;
 use super::pairing::{self, Pairing};
 use super::superpixels::Superpixels;
 use super::walk::{self, Seed, Walk, WalkEnd};
+use super::{EngineError, Params};
 
 /// The perimeter pixels in clockwise order from the top-left corner, once each.
 fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
@@ -28,7 +28,10 @@ fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
 /// Cables crossing the whole frame, with no end in view: walks from border seeds where
 /// the border shows a colour the cables in `chosen` do not explain, kept when they reach
 /// another border point (see [`border`]). Their ends belong to no given end.
-pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> Vec<Cable> {
+pub(super) fn border_crossing_cables(
+    scene: &Scene<'_>,
+    chosen: &[Pairing],
+) -> Result<Vec<Cable>, EngineError> {
     let Scene {
         walks,
         terrain,
@@ -53,10 +56,10 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
     };
     let seeds = border_seeds(evidence, sp, &covered, p);
     if seeds.is_empty() {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     let min_length = p.border_min_steps * sp.step;
-    let crossing: Vec<Walk> = walk::walk_all(terrain, &seeds)
+    let crossing: Vec<Walk> = walk::walk_all(terrain, &seeds)?
         .into_iter()
         .filter(|w| {
             let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
@@ -71,7 +74,7 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
         seeds: &seeds,
         ..*scene
     };
-    pairing::pair(&crossing, &confidence, p)
+    Ok(pairing::pair(&crossing, &confidence, p)
         .iter()
         // Only crossing walks were kept, so every pairing ends on the border or a seed.
         .filter(|c| c.score >= min_score)
@@ -80,7 +83,7 @@ pub(super) fn border_crossing_cables(scene: &Scene<'_>, chosen: &[Pairing]) -> V
             cable.end_indices = [None, None];
             cable
         })
-        .collect()
+        .collect())
 }
 
 /// What tells a cable crossing the border from background.

@@ -5,6 +5,9 @@ use thiserror::Error;
 /// Everything that can go wrong inside the pure engine.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum EngineError {
+    /// The caller's deadline passed before the work was done.
+    #[error("the deadline passed before the segmentation was done")]
+    DeadlineExceeded,
     /// A parameter is outside its allowed range.
     #[error("parameter `{name}` = {value} is out of range: {expected}")]
     InvalidParameter {

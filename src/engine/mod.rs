@@ -16,6 +16,7 @@ mod border;
 mod cable;
 pub mod color;
 pub mod connectivity;
+mod deadline;
 mod error;
 pub mod field;
 pub mod geometry;
@@ -34,6 +35,7 @@ use std::time::Instant;
 use image::RgbImage;
 
 pub use cable::Cable;
+pub use deadline::Deadline;
 pub use error::EngineError;
 pub use field::CableField;
 pub use params::{PRESET_NAMES, Params, RANGES};
@@ -100,18 +102,27 @@ pub fn segment(
     ends: &[[f64; 2]],
     params: &Params,
 ) -> Result<Segmentation, EngineError> {
-    segment_with_confidence(image, ends, &vec![1.0; ends.len()], None, params)
+    segment_with_confidence(
+        image,
+        ends,
+        &vec![1.0; ends.len()],
+        None,
+        params,
+        Deadline::NONE,
+    )
 }
 
 /// [`segment`] with a confidence in 0..=1 per end (a detector's scores: a cable that
-/// reaches no second end is only as credible as the end it starts from) and, when
-/// given and `use_field` is on, the cable field of the photo.
+/// reaches no second end is only as credible as the end it starts from), when given
+/// and `use_field` is on, the cable field of the photo, and a `deadline` past which it
+/// gives up ([`EngineError::DeadlineExceeded`]).
 pub fn segment_with_confidence(
     image: &RgbImage,
     ends: &[[f64; 2]],
     confidence: &[f32],
     field: Option<&CableField>,
     params: &Params,
+    deadline: Deadline,
 ) -> Result<Segmentation, EngineError> {
     params.validate()?;
     if confidence.len() != ends.len() {
@@ -141,8 +152,9 @@ pub fn segment_with_confidence(
         iterations: params.slic_iterations,
         min_size_factor: params.min_size_factor,
     };
-    let sp = superpixels::slic(&lab, &settings);
+    let sp = superpixels::slic_until(&lab, &settings, deadline)?;
     timings.superpixels = ms(t);
+    deadline.check()?;
 
     let t = Instant::now();
     let graph = Graph::build(&sp, rgb, &lab, params.hist_bins);
@@ -155,6 +167,7 @@ pub fn segment_with_confidence(
         field: vertex_field.as_deref(),
         step_px: sp.step,
         params,
+        deadline,
     };
 
     let t = Instant::now();
@@ -168,7 +181,7 @@ pub fn segment_with_confidence(
             }
         })
         .collect();
-    let walks = walk::walk_all(terrain, &seeds);
+    let walks = walk::walk_all(terrain, &seeds)?;
     let chosen = pairing::pair(&walks, confidence, params);
     timings.walks = ms(t);
 
@@ -184,6 +197,7 @@ pub fn segment_with_confidence(
         image,
     };
     for choice in &chosen {
+        deadline.check()?;
         let Some(mut cable) = cable::model_cable(&scene, choice) else {
             continue;
         };
@@ -197,7 +211,8 @@ pub fn segment_with_confidence(
 
     if params.border_cables {
         let t = Instant::now();
-        let found = border::border_crossing_cables(&scene, &chosen);
+        deadline.check()?;
+        let found = border::border_crossing_cables(&scene, &chosen)?;
         for mut cable in found {
             cable.id = cables.len();
             cables.push(cable);

@@ -9,6 +9,7 @@
 
 use super::color::LabImage;
 use super::connectivity::enforce_connectivity;
+use super::{Deadline, EngineError};
 
 /// A label image: one superpixel id per pixel, ids dense in `0..count`.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,6 +50,18 @@ struct Centre {
 
 /// Over-segments `lab` (already blurred if wanted) into about `n_segments` superpixels.
 pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
+    match slic_until(lab, s, Deadline::NONE) {
+        Ok(sp) => sp,
+        Err(_) => unreachable!("no deadline to pass"),
+    }
+}
+
+/// [`slic`], giving up between iterations once `deadline` has passed.
+pub fn slic_until(
+    lab: &LabImage,
+    s: &SlicSettings,
+    deadline: Deadline,
+) -> Result<Superpixels, EngineError> {
     let (w, h) = (lab.width, lab.height);
     let n = w * h;
     let step = ((n as f32) / s.n_segments.max(1) as f32).sqrt().max(1.0);
@@ -87,6 +100,7 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
     let mut dx2 = Vec::with_capacity(2 * radius as usize + 1);
 
     for _ in 0..s.iterations {
+        deadline.check()?;
         dist.fill(f32::INFINITY);
         for (k, c) in centres.iter().enumerate() {
             let x0 = (c.x as isize - radius).max(0) as usize;
@@ -132,13 +146,13 @@ pub fn slic(lab: &LabImage, s: &SlicSettings) -> Superpixels {
     }
     let min_size = ((s.min_size_factor * step * step) as usize).max(1);
     let (labels, count) = enforce_connectivity(&labels, w, h, min_size);
-    Superpixels {
+    Ok(Superpixels {
         width: w,
         height: h,
         labels,
         count,
         step,
-    }
+    })
 }
 
 /// One window row of the Lab planes and the squared, weighted x offsets from the centre.

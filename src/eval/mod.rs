@@ -94,6 +94,7 @@ pub fn evaluate_sample(
         mask: MaskKind::Binary,
         overlay: false,
         encode: false,
+        deadline: crate::engine::Deadline::NONE,
     })
     .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
     let Mask::Gray(pred) = &out.mask else {

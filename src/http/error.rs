@@ -237,7 +237,10 @@ impl From<EngineError> for ApiError {
                 ErrorCode::EndpointOutsideImage
             }
             EngineError::ImageTooSmall { .. } => ErrorCode::ImageTooSmall,
-            EngineError::BadConfidences { .. } => return Self::Internal(e.to_string()),
+            // The service maps a passed deadline itself (it knows the configured one).
+            EngineError::BadConfidences { .. } | EngineError::DeadlineExceeded => {
+                return Self::Internal(e.to_string());
+            }
         };
         Self::Unprocessable {
             code,

@@ -17,8 +17,8 @@ use super::request_id::RequestId;
 use super::state::AppState;
 use crate::decode;
 use crate::detect::EndpointDetector;
-use crate::engine::{self, MaskKind, Params};
-use crate::pipeline;
+use crate::engine::{self, Deadline, EngineError, MaskKind, Params};
+use crate::pipeline::{self, PipelineError};
 use crate::report::{self, SegmentResponse};
 
 /// Query parameters of `POST /segment`.
@@ -84,6 +84,8 @@ struct Job {
     format: ResponseFormat,
     request_id: String,
     max_pixels: u64,
+    /// When the handler stops waiting, and the configured deadline it came from.
+    deadline: (Instant, u64),
 }
 
 /// The finished work: the mask PNG alone, or the document (its queue time and total
@@ -134,7 +136,13 @@ pub async fn segment(
     // The body is read before the query is judged, so that a client still uploading
     // gets its 400 rather than a reset connection.
     let body = read_body(&state, request).await?;
-    let job = parse(&state, query.as_deref(), body, request_id.0.0.clone())?;
+    let job = parse(
+        &state,
+        query.as_deref(),
+        body,
+        request_id.0.0.clone(),
+        (deadline, deadline_ms),
+    )?;
     let span = tracing::Span::current();
     let receiver = state
         .pool
@@ -196,6 +204,7 @@ fn parse(
     query: Option<&str>,
     body: Body,
     request_id: String,
+    deadline: (Instant, u64),
 ) -> Result<Job, ApiError> {
     let query: SegmentQuery = match query {
         None | Some("") => SegmentQuery::default(),
@@ -268,6 +277,7 @@ fn parse(
         format: query.format.unwrap_or_default(),
         request_id,
         max_pixels: state.config.max_pixels,
+        deadline,
     })
 }
 
@@ -283,6 +293,13 @@ fn run_job(job: Job) -> Result<Output, ApiError> {
         mask: job.mask,
         overlay: job.overlay && json,
         encode: true,
+        deadline: Deadline(Some(job.deadline.0)),
+    })
+    .map_err(|e| match e {
+        PipelineError::Engine(EngineError::DeadlineExceeded) => ApiError::DeadlineExceeded {
+            deadline_ms: job.deadline.1,
+        },
+        other => other.into(),
     })?;
     for (name, ms) in out.timings.stages() {
         // Inference is timed only when it ran.

@@ -35,11 +35,11 @@
 
 mod step;
 
-use super::Params;
 use super::color::LabImage;
 use super::field::VertexField;
 use super::geometry::{dist, heading, norm};
 use super::graph::{Graph, Neighbourhood};
+use super::{Deadline, EngineError, Params};
 
 /// An end given to the walker: its point and the superpixel that contains it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,21 +113,25 @@ pub struct Terrain<'a> {
     pub step_px: f32,
     /// Parameters.
     pub params: &'a Params,
+    /// When to give up.
+    pub deadline: Deadline,
 }
 
 /// Runs all walks from all seeds.
-pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Vec<Walk> {
+pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, EngineError> {
     let graph = terrain.graph;
+    let deadline = terrain.deadline;
     let mut walker = Walker::new(terrain, seeds);
     let mut walks = Vec::new();
     for (s, seed) in seeds.iter().enumerate() {
         for &first in graph.neighbours(seed.vertex) {
+            deadline.check()?;
             if let Some(w) = walker.run(s, first) {
                 walks.push(w);
             }
         }
     }
-    walks
+    Ok(walks)
 }
 
 /// A scored candidate for the next step.
@@ -163,6 +167,7 @@ impl<'a> Walker<'a> {
             field,
             step_px,
             params,
+            deadline: _,
         } = terrain;
         Self {
             graph,
