@@ -170,20 +170,21 @@ fn manifests_match_the_code() {
         "cells' presets beside the built-in ones"
     );
 
-    // Shutdown: Kubernetes waits longer than preStop + deadline + drain grace.
+    // Shutdown: Kubernetes waits at least preStop + not-ready delay + the deadline of
+    // the last request admitted + the drain grace, all in a row.
     let pre_stop = container["lifecycle"]["preStop"]["sleep"]["seconds"]
         .as_u64()
         .unwrap();
     let grace = pod["spec"]["terminationGracePeriodSeconds"]
         .as_u64()
         .unwrap();
+    let needed = pre_stop
+        + parsed.shutdown_delay_s
+        + parsed.deadline_ms.div_ceil(1000)
+        + parsed.shutdown_grace_s;
     assert!(
-        grace > pre_stop + parsed.deadline_ms / 1000,
-        "grace {grace}"
-    );
-    assert!(
-        grace > pre_stop + parsed.shutdown_delay_s + parsed.shutdown_grace_s,
-        "grace {grace}"
+        grace >= needed,
+        "terminationGracePeriodSeconds {grace} < {needed}"
     );
 
     // Requests equal limits; security context as required.

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use tokio::net::TcpListener;
 
@@ -61,6 +61,7 @@ pub async fn serve(
             "shutdown requested: not ready, draining"
         );
         tokio::time::sleep(delay).await;
+        let _ = drain_state.closed_at.set(Instant::now());
         let _ = signalled_tx.send(true);
     };
     let server = axum::serve(listener, app(state)).with_graceful_shutdown(stop);
@@ -155,7 +156,12 @@ pub fn run(config: ServeConfig) -> Result<(), String> {
             .map_err(|e| format!("server error: {e}"))?;
         Ok::<_, String>(state)
     })?;
-    if !state.pool.wait_idle(grace) {
+    // One grace period in all: what the server's drain left of it.
+    let spent = state
+        .closed_at
+        .get()
+        .map_or(Duration::ZERO, Instant::elapsed);
+    if !state.pool.wait_idle(grace.saturating_sub(spent)) {
         tracing::warn!("grace period over with worker jobs still running");
     }
     tracing::info!("stopped");

@@ -2,8 +2,9 @@
 //! life-cycle flags.
 
 use std::ops::Deref;
-use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
 
 use super::config::{Presets, ServeConfig};
 use super::pool::WorkerPool;
@@ -28,6 +29,8 @@ pub struct Inner {
     pub ready: AtomicBool,
     /// True once shutdown has begun.
     pub draining: AtomicBool,
+    /// When the listener closed and the drain grace period began.
+    pub closed_at: OnceLock<Instant>,
 }
 
 impl Deref for AppState {
@@ -52,6 +55,7 @@ impl AppState {
             detector,
             ready: AtomicBool::new(false),
             draining: AtomicBool::new(false),
+            closed_at: OnceLock::new(),
         })))
     }
 }
