@@ -692,6 +692,61 @@ async fn metrics_change_after_requests() {
     }
 }
 
+/// The scrape follows the conventions: a `# HELP` line for every series, rejection
+/// counters present at 0 before any rejection, build info, process metrics, and the
+/// preset label only on `/segment`.
+#[tokio::test(flavor = "multi_thread")]
+async fn metrics_follow_the_prometheus_conventions() {
+    let app = spawn_app(|_| {}).await;
+    assert_eq!(app.get_status("/healthz").await, 200);
+    for asset in ["/docs/", "/docs/swagger-ui.css", "/docs/swagger-ui-bundle.js"] {
+        assert_eq!(app.get_status(asset).await, 200, "{asset}");
+    }
+    let text = app.get_text("/metrics").await;
+    // Swagger UI's files share one route label, not one each.
+    assert!(!text.contains("route=\"/docs/swagger-ui.css\""), "per-file route label");
+    let families: std::collections::BTreeSet<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("# TYPE "))
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert!(families.len() >= 9, "{families:?}");
+    for family in &families {
+        assert!(
+            text.contains(&format!("# HELP {family} ")),
+            "no HELP for {family}"
+        );
+    }
+    for reason in [
+        "body_too_large",
+        "too_many_pixels",
+        "too_many_endpoints",
+        "queue_full",
+        "deadline",
+    ] {
+        let line = format!("ariadne_rejections_total{{reason=\"{reason}\"}}");
+        assert!(text.contains(&line), "{line} missing");
+    }
+    assert!(text.contains(&format!(
+        "ariadne_build_info{{version=\"{}\",model=\"",
+        env!("CARGO_PKG_VERSION")
+    )));
+    for name in [
+        "process_cpu_seconds_total",
+        "process_resident_memory_bytes",
+        "process_open_fds",
+    ] {
+        let value = metric_value(&text, name, &[]);
+        assert!(value > 0.0, "{name} = {value}");
+    }
+    // /healthz was counted without a preset label.
+    let health = text
+        .lines()
+        .find(|l| l.starts_with("ariadne_requests_total") && l.contains("route=\"/healthz\""))
+        .expect("healthz counted");
+    assert!(!health.contains("preset="), "{health}");
+}
+
 /// Polls `condition` until it holds (panics after 30 s): waits for a state, never
 /// for a guessed duration.
 async fn wait_until<F: std::future::Future<Output = bool>>(mut condition: impl FnMut() -> F) {

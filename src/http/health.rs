@@ -68,6 +68,7 @@ pub async fn metrics_text(State(state): State<AppState>) -> impl IntoResponse {
     let counts = state.pool.counts();
     ::metrics::gauge!(super::metrics::QUEUE_DEPTH).set(counts.queued.load(Ordering::SeqCst) as f64);
     ::metrics::gauge!(super::metrics::IN_FLIGHT).set(counts.running.load(Ordering::SeqCst) as f64);
+    super::metrics::record_process();
     (
         [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
         super::metrics::handle().render(),

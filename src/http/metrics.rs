@@ -27,6 +27,23 @@ pub const IN_FLIGHT: &str = "ariadne_in_flight";
 pub const REJECTIONS: &str = "ariadne_rejections_total";
 /// Cables found per image.
 pub const CABLES: &str = "ariadne_cables_per_image";
+/// Always 1, labelled with the version and the model file.
+pub const BUILD_INFO: &str = "ariadne_build_info";
+/// CPU time of the process, seconds (the client libraries' name).
+const PROCESS_CPU: &str = "process_cpu_seconds_total";
+/// Resident memory of the process, bytes.
+const PROCESS_RSS: &str = "process_resident_memory_bytes";
+/// Open file descriptors (sockets included).
+const PROCESS_FDS: &str = "process_open_fds";
+
+/// Every rejection reason: each counter is exported from the start, at 0.
+pub const REJECT_REASONS: [&str; 5] = [
+    "body_too_large",
+    "too_many_pixels",
+    "too_many_endpoints",
+    "queue_full",
+    "deadline",
+];
 
 /// Latency buckets, seconds: 1 ms (endpoint inference) to 30 s.
 const SECONDS_BUCKETS: [f64; 16] = [
@@ -51,8 +68,76 @@ pub fn handle() -> &'static PrometheusHandle {
         if metrics::set_global_recorder(recorder).is_err() {
             tracing::warn!("a metrics recorder was already installed; /metrics will be empty");
         }
+        describe();
         handle
     })
+}
+
+/// `# HELP` text for every series, and the rejection counters at 0.
+fn describe() {
+    use metrics::{describe_counter, describe_gauge, describe_histogram};
+    describe_counter!(
+        REQUESTS,
+        "Requests answered, by route, status class (and preset on /segment)."
+    );
+    describe_histogram!(
+        REQUEST_SECONDS,
+        "Time from arrival to response, seconds, by route and status class."
+    );
+    describe_histogram!(STAGE_SECONDS, "Time per pipeline stage, seconds, by stage.");
+    describe_gauge!(QUEUE_DEPTH, "Requests waiting for a worker.");
+    describe_gauge!(IN_FLIGHT, "Requests being worked on.");
+    describe_counter!(REJECTIONS, "Requests refused, by reason.");
+    describe_histogram!(CABLES, "Cables found per image.");
+    describe_gauge!(
+        BUILD_INFO,
+        "Always 1: the service's version and model file."
+    );
+    describe_gauge!(
+        PROCESS_CPU,
+        "User and system CPU time of the process, seconds."
+    );
+    describe_gauge!(PROCESS_RSS, "Resident memory of the process, bytes.");
+    describe_gauge!(PROCESS_FDS, "Open file descriptors of the process.");
+    for reason in REJECT_REASONS {
+        metrics::counter!(REJECTIONS, "reason" => reason).absolute(0);
+    }
+}
+
+/// Sets `ariadne_build_info{version, model}` to 1.
+pub fn record_build_info(model: &str) {
+    metrics::gauge!(
+        BUILD_INFO,
+        "version" => env!("CARGO_PKG_VERSION"),
+        "model" => model.to_string()
+    )
+    .set(1.0);
+}
+
+/// Reads the process's CPU time, memory and descriptors from /proc (Linux; elsewhere
+/// they are not exported).
+pub fn record_process() {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the command name (which may hold spaces): utime is the 12th, stime
+    // the 13th, in clock ticks of 1/100 s (Linux's fixed USER_HZ).
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, rest)| rest.split_whitespace().collect());
+    let ticks = |i: usize| fields.get(i).and_then(|v| v.parse::<f64>().ok());
+    if let (Some(user), Some(system)) = (ticks(11), ticks(12)) {
+        metrics::gauge!(PROCESS_CPU).set((user + system) / 100.0);
+    }
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let rss_kb = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok());
+    if let Some(kb) = rss_kb {
+        metrics::gauge!(PROCESS_RSS).set(kb * 1024.0);
+    }
+    if let Ok(fds) = std::fs::read_dir("/proc/self/fd") {
+        metrics::gauge!(PROCESS_FDS).set(fds.count() as f64);
+    }
 }
 
 /// Status class label of a status code: `2xx`, `4xx`, ...
@@ -71,20 +156,25 @@ pub fn stage(name: &'static str, ms: f64) {
     metrics::histogram!(STAGE_SECONDS, "stage" => name).record(ms / 1e3);
 }
 
-/// Records a rejection.
+/// Records a rejection (`reason` one of [`REJECT_REASONS`]).
 pub fn reject(reason: &'static str) {
+    debug_assert!(REJECT_REASONS.contains(&reason), "unlisted reason {reason}");
     metrics::counter!(REJECTIONS, "reason" => reason).increment(1);
 }
 
-/// Counts one answered request.
-pub fn count_request(route: &str, status: u16, preset: &str) {
-    metrics::counter!(
-        REQUESTS,
-        "route" => route.to_string(),
-        "status_class" => status_class(status),
-        "preset" => preset.to_string()
-    )
-    .increment(1);
+/// Counts one answered request; the preset is a label of `/segment` only.
+pub fn count_request(route: &str, status: u16, preset: Option<String>) {
+    let (route, class) = (route.to_string(), status_class(status));
+    match preset {
+        Some(preset) => metrics::counter!(
+            REQUESTS,
+            "route" => route,
+            "status_class" => class,
+            "preset" => preset
+        )
+        .increment(1),
+        None => metrics::counter!(REQUESTS, "route" => route, "status_class" => class).increment(1),
+    }
 }
 
 /// Counts and times every request to a known route.
@@ -98,10 +188,10 @@ pub async fn record_requests(
         .extensions()
         .get::<MatchedPath>()
         .map_or_else(|| "unmatched".to_string(), |m| m.as_str().to_string());
-    let preset = preset_label(&state, request.uri().query());
+    let preset = (route == "/segment").then(|| preset_label(&state, request.uri().query()));
     let response = next.run(request).await;
     let status = response.status().as_u16();
-    count_request(&route, status, &preset);
+    count_request(&route, status, preset);
     metrics::histogram!(
         REQUEST_SECONDS,
         "route" => route,

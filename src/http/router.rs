@@ -44,6 +44,13 @@ pub fn openapi() -> utoipa::openapi::OpenApi {
 pub fn app(state: AppState) -> Router {
     // Install the recorder now: what is recorded before it exists is lost.
     metrics::handle();
+    let model = &state.config.detector.model;
+    metrics::record_build_info(
+        &model
+            .file_name()
+            .unwrap_or(model.as_os_str())
+            .to_string_lossy(),
+    );
     let (router, api) = routes().split_for_parts();
     let body_limit = state.config.max_body_bytes;
     router
@@ -60,11 +67,11 @@ pub fn app(state: AppState) -> Router {
 }
 
 async fn not_found(method: Method, uri: axum::http::Uri) -> ApiError {
-    metrics::count_request("unmatched", 404, "none");
+    metrics::count_request("unmatched", 404, None);
     ApiError::NotFound(format!("{method} {}", uri.path()))
 }
 
 async fn method_not_allowed(method: Method, uri: axum::http::Uri) -> ApiError {
-    metrics::count_request("unmatched", 405, "none");
+    metrics::count_request("unmatched", 405, None);
     ApiError::MethodNotAllowed(format!("{method} (on {})", uri.path()))
 }
