@@ -699,12 +699,19 @@ async fn metrics_change_after_requests() {
 async fn metrics_follow_the_prometheus_conventions() {
     let app = spawn_app(|_| {}).await;
     assert_eq!(app.get_status("/healthz").await, 200);
-    for asset in ["/docs/", "/docs/swagger-ui.css", "/docs/swagger-ui-bundle.js"] {
+    for asset in [
+        "/docs/",
+        "/docs/swagger-ui.css",
+        "/docs/swagger-ui-bundle.js",
+    ] {
         assert_eq!(app.get_status(asset).await, 200, "{asset}");
     }
     let text = app.get_text("/metrics").await;
     // Swagger UI's files share one route label, not one each.
-    assert!(!text.contains("route=\"/docs/swagger-ui.css\""), "per-file route label");
+    assert!(
+        !text.contains("route=\"/docs/swagger-ui.css\""),
+        "per-file route label"
+    );
     let families: std::collections::BTreeSet<&str> = text
         .lines()
         .filter_map(|l| l.strip_prefix("# TYPE "))
@@ -717,13 +724,7 @@ async fn metrics_follow_the_prometheus_conventions() {
             "no HELP for {family}"
         );
     }
-    for reason in [
-        "body_too_large",
-        "too_many_pixels",
-        "too_many_endpoints",
-        "queue_full",
-        "deadline",
-    ] {
+    for reason in ariadne_dlo::http::metrics::REJECT_REASONS {
         let line = format!("ariadne_rejections_total{{reason=\"{reason}\"}}");
         assert!(text.contains(&line), "{line} missing");
     }
@@ -745,6 +746,112 @@ async fn metrics_follow_the_prometheus_conventions() {
         .find(|l| l.starts_with("ariadne_requests_total") && l.contains("route=\"/healthz\""))
         .expect("healthz counted");
     assert!(!health.contains("preset="), "{health}");
+}
+
+/// A raw blocking connection to the server.
+fn raw_connection(app: &TestApp) -> std::net::TcpStream {
+    std::net::TcpStream::connect(app.base.trim_start_matches("http://")).unwrap()
+}
+
+/// Reads until the server closes `stream` or `within` passes; what it sent, and
+/// whether it closed.
+fn read_until_closed(stream: &mut std::net::TcpStream, within: Duration) -> (String, bool) {
+    use std::io::Read;
+    let until = std::time::Instant::now() + within;
+    let mut received = Vec::new();
+    let mut buf = [0u8; 4096];
+    loop {
+        let left = until.saturating_duration_since(std::time::Instant::now());
+        if left.is_zero() {
+            return (String::from_utf8_lossy(&received).into(), false);
+        }
+        stream.set_read_timeout(Some(left)).unwrap();
+        match stream.read(&mut buf) {
+            Ok(0) => return (String::from_utf8_lossy(&received).into(), true),
+            Ok(n) => received.extend_from_slice(&buf[..n]),
+            Err(e)
+                if e.kind() == std::io::ErrorKind::WouldBlock
+                    || e.kind() == std::io::ErrorKind::TimedOut =>
+            {
+                return (String::from_utf8_lossy(&received).into(), false);
+            }
+            Err(_) => return (String::from_utf8_lossy(&received).into(), true),
+        }
+    }
+}
+
+/// Writes `chunk` every `every` up to `times` times, stopping when the server has
+/// closed the connection; how long it was written to.
+fn drip(stream: &mut std::net::TcpStream, chunk: &[u8], every: Duration, times: usize) -> Duration {
+    use std::io::Write;
+    let started = std::time::Instant::now();
+    for _ in 0..times {
+        if stream.write_all(chunk).is_err() {
+            break;
+        }
+        std::thread::sleep(every);
+    }
+    started.elapsed()
+}
+
+/// Slow and idle clients are cut (headers dripped, a body dripped, a connection left
+/// idle), and the connection cap holds others in the backlog until a slot frees, so
+/// normal clients keep being served.
+#[tokio::test(flavor = "multi_thread")]
+async fn slow_and_idle_clients_are_cut_and_connections_are_capped() {
+    use std::io::Write;
+    let app = spawn_app(|c| {
+        c.header_timeout_s = 1;
+        c.body_timeout_s = 1;
+        c.max_connections = 3;
+    })
+    .await;
+    let (mut headers, mut idle) = (raw_connection(&app), raw_connection(&app));
+    let addr = app.base.trim_start_matches("http://").to_string();
+    let slow = tokio::task::spawn_blocking(move || {
+        // Headers at one byte per 200 ms: closed at the header timeout.
+        headers
+            .write_all(b"POST /segment HTTP/1.1\r\nHost: x\r\n")
+            .unwrap();
+        drip(&mut headers, b"a", Duration::from_millis(200), 10);
+        let (_, headers_closed) = read_until_closed(&mut headers, Duration::from_secs(2));
+        // An idle connection: closed after the header timeout.
+        let (_, idle_closed) = read_until_closed(&mut idle, Duration::from_secs(2));
+        // A body at 10 bytes per 200 ms: 408 at the body timeout.
+        let mut body = std::net::TcpStream::connect(&addr).unwrap();
+        body.write_all(
+            b"POST /segment HTTP/1.1\r\nHost: x\r\nContent-Type: image/jpeg\r\nContent-Length: 100000\r\n\r\n",
+        )
+        .unwrap();
+        drip(&mut body, &[0u8; 10], Duration::from_millis(200), 8);
+        let (answer, _) = read_until_closed(&mut body, Duration::from_secs(3));
+        (headers_closed, idle_closed, answer)
+    });
+    let (headers_closed, idle_closed, answer) = slow.await.unwrap();
+    assert!(headers_closed, "header drip not cut");
+    assert!(idle_closed, "idle connection kept open");
+    assert!(answer.starts_with("HTTP/1.1 408"), "{answer}");
+    assert!(answer.contains("body_timeout"), "{answer}");
+    // Three idle connections take every slot: a normal request waits in the backlog
+    // until the header timeout cuts them, then is served.
+    let hogs: Vec<_> = (0..3).map(|_| raw_connection(&app)).collect();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let started = std::time::Instant::now();
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .multipart(form(photo(), Some(ends_json())))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let waited = started.elapsed();
+    assert!(
+        waited > Duration::from_millis(500),
+        "the cap let a fourth connection in at once ({waited:?})"
+    );
+    assert!(waited < Duration::from_secs(3), "{waited:?}");
+    drop(hogs);
 }
 
 /// Polls `condition` until it holds (panics after 30 s): waits for a state, never

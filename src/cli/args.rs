@@ -103,6 +103,16 @@ pub struct ServeArgs {
     /// Most cable ends one request may give; more are answered 422.
     #[arg(long, env = "ARIADNE_MAX_ENDPOINTS", default_value_t = ServeConfig::default().max_endpoints)]
     pub max_endpoints: usize,
+    /// Most open connections; more wait in the listen backlog until one closes.
+    #[arg(long, env = "ARIADNE_MAX_CONNECTIONS", default_value_t = ServeConfig::default().max_connections)]
+    pub max_connections: usize,
+    /// Seconds a connection gets to send a request's headers, and most seconds an
+    /// open connection may stay idle between requests.
+    #[arg(long, env = "ARIADNE_HEADER_TIMEOUT_S", default_value_t = ServeConfig::default().header_timeout_s)]
+    pub header_timeout_s: u64,
+    /// Seconds a request gets to send its body; slower ones are answered 408.
+    #[arg(long, env = "ARIADNE_BODY_TIMEOUT_S", default_value_t = ServeConfig::default().body_timeout_s)]
+    pub body_timeout_s: u64,
     /// Seconds `Retry-After` asks rejected clients to wait.
     #[arg(long, env = "ARIADNE_RETRY_AFTER_S", default_value_t = ServeConfig::default().retry_after_s)]
     pub retry_after_s: u64,
@@ -134,6 +144,9 @@ impl From<ServeArgs> for ServeConfig {
             max_body_bytes: a.max_body_bytes,
             max_pixels: a.max_pixels,
             max_endpoints: a.max_endpoints,
+            max_connections: a.max_connections,
+            header_timeout_s: a.header_timeout_s,
+            body_timeout_s: a.body_timeout_s,
             retry_after_s: a.retry_after_s,
             presets: a.presets,
             log_format: a.log_format,

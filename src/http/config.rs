@@ -46,6 +46,13 @@ pub struct ServeConfig {
     pub max_pixels: u64,
     /// Most cable ends one request may give; more are answered 422.
     pub max_endpoints: usize,
+    /// Most open connections; more wait in the listen backlog until one closes.
+    pub max_connections: usize,
+    /// Seconds a connection gets to send a request's headers, and most seconds an
+    /// open connection may stay idle between requests.
+    pub header_timeout_s: u64,
+    /// Seconds a request gets to send its body; slower ones are answered 408.
+    pub body_timeout_s: u64,
     /// Seconds `Retry-After` asks rejected clients to wait.
     pub retry_after_s: u64,
     /// JSON file of extra or overriding presets.
@@ -70,6 +77,9 @@ impl Default for ServeConfig {
             max_body_bytes: 16 * 1024 * 1024,
             max_pixels: 16_000_000,
             max_endpoints: 256,
+            max_connections: 512,
+            header_timeout_s: 10,
+            body_timeout_s: 30,
             retry_after_s: 1,
             presets: None,
             log_format: LogFormat::Text,

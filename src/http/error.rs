@@ -48,6 +48,8 @@ pub enum ErrorCode {
     OptionOutOfRange,
     /// 422: the image is too small to segment.
     ImageTooSmall,
+    /// 408: the body did not arrive within `--body-timeout-s`.
+    BodyTimeout,
     /// 429: the queue is full.
     QueueFull,
     /// 504: the deadline passed.
@@ -80,6 +82,7 @@ impl ErrorCode {
             Self::TooManyEndpoints => "too_many_endpoints",
             Self::OptionOutOfRange => "option_out_of_range",
             Self::ImageTooSmall => "image_too_small",
+            Self::BodyTimeout => "body_timeout",
             Self::QueueFull => "queue_full",
             Self::DeadlineExceeded => "deadline_exceeded",
             Self::NotFound => "not_found",
@@ -126,6 +129,12 @@ pub enum ApiError {
         queue: usize,
         /// Seconds to wait.
         retry_after_s: u64,
+    },
+    /// The body was sent too slowly.
+    #[error("the request body did not arrive within {timeout_s} s")]
+    BodyTimeout {
+        /// The configured limit.
+        timeout_s: u64,
     },
     /// The request took longer than its deadline.
     #[error("the request exceeded its deadline of {deadline_ms} ms")]
@@ -176,6 +185,7 @@ impl ApiError {
             Self::TooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
             Self::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             Self::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
+            Self::BodyTimeout { .. } => StatusCode::REQUEST_TIMEOUT,
             Self::QueueFull { .. } => StatusCode::TOO_MANY_REQUESTS,
             Self::DeadlineExceeded { .. } => StatusCode::GATEWAY_TIMEOUT,
             Self::NotFound(_) => StatusCode::NOT_FOUND,
@@ -191,6 +201,7 @@ impl ApiError {
             | Self::TooLarge { code, .. }
             | Self::Unprocessable { code, .. } => *code,
             Self::UnsupportedMediaType(_) => ErrorCode::UnsupportedMediaType,
+            Self::BodyTimeout { .. } => ErrorCode::BodyTimeout,
             Self::QueueFull { .. } => ErrorCode::QueueFull,
             Self::DeadlineExceeded { .. } => ErrorCode::DeadlineExceeded,
             Self::NotFound(_) => ErrorCode::NotFound,

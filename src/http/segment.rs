@@ -116,6 +116,7 @@ enum Output {
         )),
         (status = 400, description = "Malformed request: no image part, a part or option key given twice, bad JSON in a part, bad query value", body = ErrorBody),
         (status = 413, description = "Body or pixel count over the limit", body = ErrorBody),
+        (status = 408, description = "The body did not arrive within --body-timeout-s", body = ErrorBody),
         (status = 415, description = "Not JPEG, PNG or multipart", body = ErrorBody),
         (status = 422, description = "Undecodable or truncated image, ends outside the image or more than --max-endpoints, options out of range", body = ErrorBody),
         (status = 429, description = "Queue full; see Retry-After", body = ErrorBody),
@@ -135,7 +136,13 @@ pub async fn segment(
     let deadline = started + Duration::from_millis(deadline_ms);
     // The body is read before the query is judged, so that a client still uploading
     // gets its 400 rather than a reset connection.
-    let body = read_body(&state, request).await?;
+    let timeout_s = state.config.body_timeout_s;
+    let body = tokio::time::timeout(Duration::from_secs(timeout_s), read_body(&state, request))
+        .await
+        .map_err(|_| {
+            metrics::reject("body_timeout");
+            ApiError::BodyTimeout { timeout_s }
+        })??;
     let job = parse(
         &state,
         query.as_deref(),

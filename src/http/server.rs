@@ -1,10 +1,15 @@
 //! Running the service: warm-up, serving until a signal, graceful shutdown, logging.
 
+use std::pin::pin;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
+use hyper::server::conn::http1;
+use hyper_util::rt::{TokioIo, TokioTimer};
+use hyper_util::service::TowerToHyperService;
 use tokio::net::TcpListener;
+use tokio::sync::{Semaphore, watch};
 
 use super::config::{LogFormat, Presets, ServeConfig};
 use super::error::ApiError;
@@ -42,18 +47,24 @@ pub async fn warm_up(state: &AppState) -> Result<(), ApiError> {
 }
 
 /// Serves `state` on `listener` until `shutdown` resolves; then turns not-ready, waits
-/// `shutdown_delay_s`, stops accepting and gives in-flight requests
-/// `shutdown_grace_s` to finish.
+/// `shutdown_delay_s`, stops accepting and gives open connections `shutdown_grace_s`
+/// to finish their requests.
+///
+/// Each connection is HTTP/1.1 served by hyper with a header-read timeout (which also
+/// closes connections idle between requests), and at most `max_connections` are open:
+/// more wait in the listen backlog until one closes.
 pub async fn serve(
     listener: TcpListener,
     state: AppState,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
-    let delay = Duration::from_secs(state.config.shutdown_delay_s);
-    let grace = Duration::from_secs(state.config.shutdown_grace_s);
-    let (signalled_tx, mut signalled_rx) = tokio::sync::watch::channel(false);
+    let config = &state.config;
+    let delay = Duration::from_secs(config.shutdown_delay_s);
+    let grace = Duration::from_secs(config.shutdown_grace_s);
+    let header_timeout = Duration::from_secs(config.header_timeout_s.max(1));
+    let slots = Arc::new(Semaphore::new(config.max_connections.max(1)));
     let drain_state = state.clone();
-    let stop = async move {
+    let mut stop = pin!(async move {
         shutdown.await;
         drain_state.draining.store(true, Ordering::SeqCst);
         tracing::info!(
@@ -62,24 +73,58 @@ pub async fn serve(
         );
         tokio::time::sleep(delay).await;
         let _ = drain_state.closed_at.set(Instant::now());
-        let _ = signalled_tx.send(true);
-    };
-    let server = axum::serve(listener, app(state)).with_graceful_shutdown(stop);
-    let grace_timer = async move {
-        while !*signalled_rx.borrow() {
-            if signalled_rx.changed().await.is_err() {
-                std::future::pending::<()>().await;
+    });
+    let router = app(state.clone());
+    // Connections watch `closing` to finish gracefully; each holds a receiver of
+    // `open`, whose sender sees them all gone when it is closed.
+    let (closing_tx, closing_rx) = watch::channel(());
+    let (open_tx, open_rx) = watch::channel(());
+    loop {
+        let slot = tokio::select! {
+            slot = Arc::clone(&slots).acquire_owned() => slot.expect("the semaphore is never closed"),
+            () = &mut stop => break,
+        };
+        let stream = tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok((stream, _)) => stream,
+                Err(e) => {
+                    // Out of descriptors and the like: wait rather than spin.
+                    tracing::warn!(error = %e, "accept failed");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                    continue;
+                }
+            },
+            () = &mut stop => break,
+        };
+        let service = TowerToHyperService::new(router.clone());
+        let (mut closing, open) = (closing_rx.clone(), open_rx.clone());
+        tokio::spawn(async move {
+            let mut builder = http1::Builder::new();
+            builder
+                .timer(TokioTimer::new())
+                .header_read_timeout(header_timeout);
+            let connection = builder.serve_connection(TokioIo::new(stream), service);
+            let mut connection = pin!(connection);
+            tokio::select! {
+                _ = connection.as_mut() => {}
+                _ = closing.changed() => {
+                    connection.as_mut().graceful_shutdown();
+                    let _ = connection.await;
+                }
             }
-        }
-        tokio::time::sleep(grace).await;
-    };
-    tokio::select! {
-        result = server => result,
-        () = grace_timer => {
-            tracing::warn!(grace_s = grace.as_secs(), "grace period over; exiting with requests in flight");
-            Ok(())
-        }
+            drop((slot, open));
+        });
     }
+    drop(listener);
+    let _ = closing_tx.send(());
+    drop(open_rx);
+    if tokio::time::timeout(grace, open_tx.closed()).await.is_err() {
+        tracing::warn!(
+            grace_s = grace.as_secs(),
+            "grace period over; exiting with requests in flight"
+        );
+    }
+    Ok(())
 }
 
 /// Resolves on SIGTERM or SIGINT.
