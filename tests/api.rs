@@ -854,6 +854,61 @@ async fn slow_and_idle_clients_are_cut_and_connections_are_capped() {
     drop(hogs);
 }
 
+/// Request bodies held in memory are bounded: an upload is admitted against a budget
+/// from its declared length before its body is read; one that does not fit is answered
+/// 429 at once, and the budget is returned when a request ends.
+#[tokio::test(flavor = "multi_thread")]
+async fn uploads_are_admitted_within_the_memory_budget() {
+    use std::io::Write;
+    let app = spawn_app(|c| {
+        c.max_body_bytes = 1_000_000;
+        c.upload_budget_bytes = 1_000_000;
+    })
+    .await;
+    let head = |length: usize| {
+        format!(
+            "POST /segment HTTP/1.1\r\nHost: x\r\nContent-Type: image/jpeg\r\nContent-Length: {length}\r\n\r\n"
+        )
+    };
+    // A 600 KB upload in progress holds 600 KB of the budget.
+    let mut holder = raw_connection(&app);
+    holder.write_all(head(600_000).as_bytes()).unwrap();
+    holder.write_all(&[0u8; 1000]).unwrap();
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    // A second one of 500 KB does not fit: 429 before a byte of its body is sent.
+    let mut refused = raw_connection(&app);
+    refused.write_all(head(500_000).as_bytes()).unwrap();
+    let (answer, _) = tokio::task::spawn_blocking(move || {
+        read_until_closed(&mut refused, Duration::from_secs(2))
+    })
+    .await
+    .unwrap();
+    assert!(answer.starts_with("HTTP/1.1 429"), "{answer}");
+    assert!(answer.contains("upload_budget_full"), "{answer}");
+    // A small one fits beside the first.
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .multipart(form(photo(), Some(ends_json())))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    // Once the first ends, its share is back: a 500 KB declaration is admitted (and
+    // its garbage body then refused for what it is).
+    drop(holder);
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .header("content-type", "image/jpeg")
+        .body(vec![7u8; 500_000])
+        .send()
+        .await
+        .unwrap();
+    expect_error(response, 422, "undecodable_image").await;
+}
+
 /// Polls `condition` until it holds (panics after 30 s): waits for a state, never
 /// for a guessed duration.
 async fn wait_until<F: std::future::Future<Output = bool>>(mut condition: impl FnMut() -> F) {

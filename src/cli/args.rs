@@ -113,6 +113,10 @@ pub struct ServeArgs {
     /// Seconds a request gets to send its body; slower ones are answered 408.
     #[arg(long, env = "ARIADNE_BODY_TIMEOUT_S", default_value_t = ServeConfig::default().body_timeout_s)]
     pub body_timeout_s: u64,
+    /// Request bodies in memory at once, bytes; a request that would go over is
+    /// answered 429 before its body is read.
+    #[arg(long, env = "ARIADNE_UPLOAD_BUDGET_BYTES", default_value_t = ServeConfig::default().upload_budget_bytes)]
+    pub upload_budget_bytes: usize,
     /// Seconds `Retry-After` asks rejected clients to wait.
     #[arg(long, env = "ARIADNE_RETRY_AFTER_S", default_value_t = ServeConfig::default().retry_after_s)]
     pub retry_after_s: u64,
@@ -147,6 +151,7 @@ impl From<ServeArgs> for ServeConfig {
             max_connections: a.max_connections,
             header_timeout_s: a.header_timeout_s,
             body_timeout_s: a.body_timeout_s,
+            upload_budget_bytes: a.upload_budget_bytes,
             retry_after_s: a.retry_after_s,
             presets: a.presets,
             log_format: a.log_format,

@@ -53,6 +53,10 @@ pub struct ServeConfig {
     pub header_timeout_s: u64,
     /// Seconds a request gets to send its body; slower ones are answered 408.
     pub body_timeout_s: u64,
+    /// Request bodies in memory at once, bytes (declared lengths, or `max_body_bytes`
+    /// for a body of unknown length), from admission to the end of the request's work;
+    /// a request that would go over is answered 429 before its body is read.
+    pub upload_budget_bytes: usize,
     /// Seconds `Retry-After` asks rejected clients to wait.
     pub retry_after_s: u64,
     /// JSON file of extra or overriding presets.
@@ -80,6 +84,7 @@ impl Default for ServeConfig {
             max_connections: 512,
             header_timeout_s: 10,
             body_timeout_s: 30,
+            upload_budget_bytes: 256 * 1024 * 1024,
             retry_after_s: 1,
             presets: None,
             log_format: LogFormat::Text,

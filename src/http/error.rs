@@ -52,6 +52,8 @@ pub enum ErrorCode {
     BodyTimeout,
     /// 429: the queue is full.
     QueueFull,
+    /// 429: the bodies in memory fill the upload budget.
+    UploadBudgetFull,
     /// 504: the deadline passed.
     DeadlineExceeded,
     /// 404: no such route.
@@ -84,6 +86,7 @@ impl ErrorCode {
             Self::ImageTooSmall => "image_too_small",
             Self::BodyTimeout => "body_timeout",
             Self::QueueFull => "queue_full",
+            Self::UploadBudgetFull => "upload_budget_full",
             Self::DeadlineExceeded => "deadline_exceeded",
             Self::NotFound => "not_found",
             Self::MethodNotAllowed => "method_not_allowed",
@@ -127,6 +130,16 @@ pub enum ApiError {
     QueueFull {
         /// Queue length.
         queue: usize,
+        /// Seconds to wait.
+        retry_after_s: u64,
+    },
+    /// The request bodies in memory leave no room for this one's.
+    #[error(
+        "the request bodies being worked on fill the upload budget of {budget_bytes} bytes; retry after {retry_after_s} s"
+    )]
+    UploadBudgetFull {
+        /// The configured budget.
+        budget_bytes: usize,
         /// Seconds to wait.
         retry_after_s: u64,
     },
@@ -186,7 +199,7 @@ impl ApiError {
             Self::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             Self::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             Self::BodyTimeout { .. } => StatusCode::REQUEST_TIMEOUT,
-            Self::QueueFull { .. } => StatusCode::TOO_MANY_REQUESTS,
+            Self::QueueFull { .. } | Self::UploadBudgetFull { .. } => StatusCode::TOO_MANY_REQUESTS,
             Self::DeadlineExceeded { .. } => StatusCode::GATEWAY_TIMEOUT,
             Self::NotFound(_) => StatusCode::NOT_FOUND,
             Self::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
@@ -203,6 +216,7 @@ impl ApiError {
             Self::UnsupportedMediaType(_) => ErrorCode::UnsupportedMediaType,
             Self::BodyTimeout { .. } => ErrorCode::BodyTimeout,
             Self::QueueFull { .. } => ErrorCode::QueueFull,
+            Self::UploadBudgetFull { .. } => ErrorCode::UploadBudgetFull,
             Self::DeadlineExceeded { .. } => ErrorCode::DeadlineExceeded,
             Self::NotFound(_) => ErrorCode::NotFound,
             Self::MethodNotAllowed(_) => ErrorCode::MethodNotAllowed,
@@ -290,7 +304,9 @@ impl IntoResponse for ApiError {
             },
         };
         let mut response = (status, Json(body)).into_response();
-        if let Self::QueueFull { retry_after_s, .. } = self {
+        if let Self::QueueFull { retry_after_s, .. }
+        | Self::UploadBudgetFull { retry_after_s, .. } = self
+        {
             response
                 .headers_mut()
                 .insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));

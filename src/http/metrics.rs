@@ -37,12 +37,13 @@ const PROCESS_RSS: &str = "process_resident_memory_bytes";
 const PROCESS_FDS: &str = "process_open_fds";
 
 /// Every rejection reason: each counter is exported from the start, at 0.
-pub const REJECT_REASONS: [&str; 6] = [
+pub const REJECT_REASONS: [&str; 7] = [
     "body_too_large",
     "body_timeout",
     "too_many_pixels",
     "too_many_endpoints",
     "queue_full",
+    "upload_budget",
     "deadline",
 ];
 

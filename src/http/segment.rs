@@ -3,6 +3,8 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use tokio::sync::OwnedSemaphorePermit;
+
 use axum::body::Bytes;
 use axum::extract::{RawQuery, Request, State};
 use axum::http::{HeaderValue, header};
@@ -14,7 +16,7 @@ use super::body::{Body, read_body};
 use super::error::{ApiError, ErrorBody, ErrorCode};
 use super::metrics;
 use super::request_id::RequestId;
-use super::state::AppState;
+use super::state::{AppState, UPLOAD_UNIT};
 use crate::decode;
 use crate::detect::EndpointDetector;
 use crate::engine::{self, Deadline, EngineError, MaskKind, Params};
@@ -119,7 +121,7 @@ enum Output {
         (status = 408, description = "The body did not arrive within --body-timeout-s", body = ErrorBody),
         (status = 415, description = "Not JPEG, PNG or multipart", body = ErrorBody),
         (status = 422, description = "Undecodable or truncated image, ends outside the image or more than --max-endpoints, options out of range", body = ErrorBody),
-        (status = 429, description = "Queue full; see Retry-After", body = ErrorBody),
+        (status = 429, description = "Queue full, or the upload budget full; see Retry-After", body = ErrorBody),
         (status = 500, description = "Bug; the server stays up", body = ErrorBody),
         (status = 504, description = "Deadline exceeded", body = ErrorBody),
     ),
@@ -134,6 +136,9 @@ pub async fn segment(
     let started = Instant::now();
     let deadline_ms = state.config.deadline_ms;
     let deadline = started + Duration::from_millis(deadline_ms);
+    // Admission before the body is read: room in the upload budget for what it
+    // declares (held until the work ends) and in the queue.
+    let upload = admit(&state, &request)?;
     // The body is read before the query is judged, so that a client still uploading
     // gets its 400 rather than a reset connection.
     let timeout_s = state.config.body_timeout_s;
@@ -155,6 +160,7 @@ pub async fn segment(
         .pool
         .try_submit(move || {
             let _entered = span.enter();
+            let _upload = upload;
             if Instant::now() >= deadline {
                 // Nobody is waiting for this answer any more: skip the work.
                 return Err(ApiError::DeadlineExceeded { deadline_ms });
@@ -202,6 +208,43 @@ pub async fn segment(
             Ok(axum::Json(response).into_response())
         }
     }
+}
+
+/// Admits a request before its body is read: a share of the upload budget for the
+/// length it declares (the body limit when it declares none), and a free place in the
+/// queue; otherwise 429 at once.
+fn admit(state: &AppState, request: &Request) -> Result<OwnedSemaphorePermit, ApiError> {
+    let limit = state.config.max_body_bytes;
+    let declared = request
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok()?.parse::<usize>().ok())
+        .unwrap_or(limit)
+        .min(limit);
+    let units = u32::try_from(declared.div_ceil(UPLOAD_UNIT).max(1)).unwrap_or(u32::MAX);
+    let retry_after_s = state.config.retry_after_s;
+    if state
+        .pool
+        .counts()
+        .queued
+        .load(std::sync::atomic::Ordering::SeqCst)
+        >= state.pool.queue_capacity()
+    {
+        metrics::reject("queue_full");
+        return Err(ApiError::QueueFull {
+            queue: state.pool.queue_capacity(),
+            retry_after_s,
+        });
+    }
+    Arc::clone(&state.uploads)
+        .try_acquire_many_owned(units)
+        .map_err(|_| {
+            metrics::reject("upload_budget");
+            ApiError::UploadBudgetFull {
+                budget_bytes: state.config.upload_budget_bytes,
+                retry_after_s,
+            }
+        })
 }
 
 /// Judges the query and the parts, and checks the image's type and pixel count from its

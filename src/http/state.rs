@@ -6,6 +6,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
+use tokio::sync::Semaphore;
+
 use super::config::{Presets, ServeConfig};
 use super::pool::WorkerPool;
 use crate::detect::EndpointDetector;
@@ -31,7 +33,12 @@ pub struct Inner {
     pub draining: AtomicBool,
     /// When the listener closed and the drain grace period began.
     pub closed_at: OnceLock<Instant>,
+    /// The upload budget, one permit per KiB ([`UPLOAD_UNIT`] bytes).
+    pub uploads: Arc<Semaphore>,
 }
+
+/// Bytes per permit of [`Inner::uploads`].
+pub const UPLOAD_UNIT: usize = 1024;
 
 impl Deref for AppState {
     type Target = Inner;
@@ -48,6 +55,7 @@ impl AppState {
         detector: Arc<dyn EndpointDetector>,
     ) -> std::io::Result<Self> {
         let pool = WorkerPool::new(config.worker_count(), config.queue)?;
+        let config_budget = config.upload_budget_bytes;
         Ok(Self(Arc::new(Inner {
             config,
             presets,
@@ -56,6 +64,11 @@ impl AppState {
             ready: AtomicBool::new(false),
             draining: AtomicBool::new(false),
             closed_at: OnceLock::new(),
+            uploads: Arc::new(Semaphore::new(
+                config_budget
+                    .div_ceil(UPLOAD_UNIT)
+                    .min(Semaphore::MAX_PERMITS),
+            )),
         })))
     }
 }
