@@ -909,6 +909,39 @@ async fn uploads_are_admitted_within_the_memory_budget() {
     expect_error(response, 422, "undecodable_image").await;
 }
 
+/// A client that hangs up while its request is worked on is still counted (status
+/// class `client_closed`).
+#[tokio::test(flavor = "multi_thread")]
+async fn requests_whose_client_left_are_counted() {
+    let app = spawn_app(|_| {}).await;
+    let labels = ["route=\"/segment\"", "status_class=\"client_closed\""];
+    let before = metric_value(
+        &app.get_text("/metrics").await,
+        "ariadne_requests_total",
+        &labels,
+    );
+    // The client gives up 300 ms into a request that works for over a second.
+    let abandoned =
+        tokio::time::timeout(Duration::from_millis(300), slow_request(&app).send()).await;
+    assert!(
+        abandoned.is_err(),
+        "the slow request answered within 300 ms"
+    );
+    let started = std::time::Instant::now();
+    loop {
+        let now = metric_value(
+            &app.get_text("/metrics").await,
+            "ariadne_requests_total",
+            &labels,
+        );
+        if now > before {
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(5), "never counted");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
 /// Polls `condition` until it holds (panics after 30 s): waits for a state, never
 /// for a guessed duration.
 async fn wait_until<F: std::future::Future<Output = bool>>(mut condition: impl FnMut() -> F) {

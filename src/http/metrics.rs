@@ -166,7 +166,11 @@ pub fn reject(reason: &'static str) {
 
 /// Counts one answered request; the preset is a label of `/segment` only.
 pub fn count_request(route: &str, status: u16, preset: Option<String>) {
-    let (route, class) = (route.to_string(), status_class(status));
+    count(route.to_string(), status_class(status), preset);
+}
+
+/// Counts one request by route, status class and (on `/segment`) preset.
+fn count(route: String, class: &'static str, preset: Option<String>) {
     match preset {
         Some(preset) => metrics::counter!(
             REQUESTS,
@@ -179,28 +183,60 @@ pub fn count_request(route: &str, status: u16, preset: Option<String>) {
     }
 }
 
-/// Counts and times every request to a known route.
+/// Counts and times every request to a known route. A request whose client goes away
+/// before the answer (the server then drops its future) is counted with the status
+/// class `client_closed` and logged, so the work it cost still shows.
 pub async fn record_requests(
     State(state): State<AppState>,
     request: Request,
     next: Next,
 ) -> Response {
-    let started = Instant::now();
     let route = request
         .extensions()
         .get::<MatchedPath>()
         .map_or_else(|| "unmatched".to_string(), |m| m.as_str().to_string());
     let preset = (route == "/segment").then(|| preset_label(&state, request.uri().query()));
+    let mut pending = Pending {
+        route,
+        preset,
+        started: Instant::now(),
+        answered: false,
+    };
     let response = next.run(request).await;
+    pending.answered = true;
     let status = response.status().as_u16();
-    count_request(&route, status, preset);
-    metrics::histogram!(
-        REQUEST_SECONDS,
-        "route" => route,
-        "status_class" => status_class(status)
-    )
-    .record(started.elapsed().as_secs_f64());
+    pending.record(status_class(status));
     response
+}
+
+/// A request in progress, recorded once: with its status class when answered, as
+/// `client_closed` when dropped unanswered.
+struct Pending {
+    route: String,
+    preset: Option<String>,
+    started: Instant,
+    answered: bool,
+}
+
+impl Pending {
+    fn record(&self, class: &'static str) {
+        count(self.route.clone(), class, self.preset.clone());
+        metrics::histogram!(REQUEST_SECONDS, "route" => self.route.clone(), "status_class" => class)
+            .record(self.started.elapsed().as_secs_f64());
+    }
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        if !self.answered {
+            self.record("client_closed");
+            tracing::warn!(
+                route = %self.route,
+                after_ms = self.started.elapsed().as_millis() as u64,
+                "client closed the connection before the answer"
+            );
+        }
+    }
 }
 
 /// The preset label of a request: a known preset's name, `default` when none is
