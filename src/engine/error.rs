@@ -26,7 +26,11 @@ pub enum EngineError {
     #[error("unknown preset `{0}` (known: {1})")]
     UnknownPreset(String, String),
     /// An end point lies outside the image.
-    #[error("endpoint #{index} ({x}, {y}) lies outside the {width}x{height} image")]
+    #[error(
+        "endpoint #{index} ({}, {}) lies outside the {width}x{height} image",
+        compact(*.x),
+        compact(*.y)
+    )]
     EndpointOutside {
         /// Position of the end in the given list.
         index: usize,
@@ -63,4 +67,39 @@ pub enum EngineError {
         /// Smallest accepted side, pixels.
         min: u32,
     },
+}
+
+/// A number as a person reads it in a message: plain when moderate, in scientific
+/// notation when huge or tiny (`1e308`, not 309 digits).
+pub fn compact(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e6).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        assert_eq!(compact(1e308), "1e308");
+        assert_eq!(compact(-2.5e-7), "-2.5e-7");
+        assert_eq!(compact(640.5), "640.5");
+        assert_eq!(compact(0.0), "0");
+        let e = EngineError::EndpointOutside {
+            index: 0,
+            x: 1e308,
+            y: 2.0,
+            width: 640,
+            height: 480,
+        };
+        assert_eq!(
+            e.to_string(),
+            "endpoint #0 (1e308, 2) lies outside the 640x480 image"
+        );
+    }
 }

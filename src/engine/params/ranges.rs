@@ -15,7 +15,7 @@ impl Params {
             if !(value.is_finite() && (min..=max).contains(&value)) {
                 return Err(EngineError::InvalidParameter {
                     name,
-                    value: value.to_string(),
+                    value: crate::engine::error::compact(value),
                     expected: format!("{min} ..= {max}"),
                 });
             }
