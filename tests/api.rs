@@ -213,6 +213,26 @@ async fn a_photo_alone_runs_the_detector() {
         app.endpoint_inferences().await >= 1.0,
         "endpoint inference time is recorded"
     );
+    // A form whose text parts were left blank (as Swagger UI sends it) is a photo alone.
+    let blank = form(photo(), Some(String::new())).text("options", "");
+    let response = app
+        .client
+        .post(app.url("/segment"))
+        .multipart(blank)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let body: Value = response.json().await.unwrap();
+    assert_eq!(body["endpoints"].as_array().unwrap().len(), ends.len());
+    // And the OpenAPI document pre-fills nothing that would become a value.
+    let doc: Value = serde_json::from_str(&app.get_text("/openapi.json").await).unwrap();
+    for p in doc["paths"]["/segment"]["post"]["parameters"]
+        .as_array()
+        .unwrap()
+    {
+        assert!(p.get("example").is_none(), "{p}");
+    }
 }
 
 #[tokio::test(flavor = "multi_thread")]

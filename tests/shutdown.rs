@@ -1,5 +1,6 @@
 //! The real binary's shutdown: SIGTERM with a long request in flight exits after one
-//! drain grace period, not two (needs `make setup`: the service loads the model).
+//! drain grace period, not two; and its text logs, written to a pipe, carry no colour
+//! codes (needs `make setup`: the service loads the model).
 
 #![allow(clippy::unwrap_used)] // test code: a failure should panic
 
@@ -32,7 +33,7 @@ async fn the_drain_grace_is_applied_once() {
             .args(["serve", "--bind", &format!("127.0.0.1:{port}")])
             .args(["--workers", "1", "--shutdown-grace-s", "1"])
             .args(["--deadline-ms", "20000"])
-            .stdout(Stdio::null())
+            .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .unwrap(),
@@ -107,4 +108,11 @@ async fn the_drain_grace_is_applied_once() {
         "exited {took:?}: no grace at all"
     );
     let _ = slow.await;
+    let mut logs = String::new();
+    std::io::Read::read_to_string(&mut service.0.stdout.take().unwrap(), &mut logs).unwrap();
+    assert!(logs.contains("listening"), "{logs}");
+    assert!(
+        !logs.contains('\u{1b}'),
+        "colour codes in logs written to a pipe"
+    );
 }

@@ -74,12 +74,16 @@ pub async fn read_body(state: &AppState, request: Request) -> Result<Body, ApiEr
                 "image" => {
                     image = Some(field.bytes().await.map_err(|e| multipart_error(state, e))?)
                 }
+                // An empty text part is no part (a form left blank).
                 "endpoints" => {
-                    ends = Some(field.text().await.map_err(|e| multipart_error(state, e))?)
+                    let text = field.text().await.map_err(|e| multipart_error(state, e))?;
+                    ends = Some(text).filter(|t| !t.trim().is_empty());
                 }
                 _ => {
                     let text = field.text().await.map_err(|e| multipart_error(state, e))?;
-                    options = Some(parse_options(&text)?);
+                    if !text.trim().is_empty() {
+                        options = Some(parse_options(&text)?);
+                    }
                 }
             }
         }

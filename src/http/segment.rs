@@ -28,19 +28,20 @@ use crate::report::{self, SegmentResponse};
 #[serde(deny_unknown_fields)]
 #[into_params(parameter_in = Query)]
 pub struct SegmentQuery {
-    /// Named parameter set (`default`, `clutter`, or one from the presets file).
-    #[param(example = "default")]
+    // No `example`s: Swagger UI's "Try it out" would send them as values.
+    /// Named parameter set (`default` when absent, `clutter`, `paper`, or one from the
+    /// presets file).
     pub preset: Option<String>,
     /// Mask kind: `binary` (0/255, default), `labels` (cable k = k+1), `color`.
-    #[param(value_type = Option<String>, example = "binary")]
+    #[param(value_type = Option<String>)]
     pub mask: Option<MaskKind>,
     /// Also return the photo with the curves drawn on it (`overlay_png`).
     pub overlay: Option<bool>,
     /// `json` (default) or `png` to receive only the mask PNG.
-    #[param(value_type = Option<String>, example = "json")]
+    #[param(value_type = Option<String>)]
     pub format: Option<ResponseFormat>,
-    /// Cable ends for raw-body requests, URL-encoded JSON `[[x,y],...]`.
-    #[param(example = "[[120,40],[300,210]]")]
+    /// Cable ends for raw-body requests, URL-encoded JSON such as
+    /// `[[120,40],[300,210]]`; absent: the network finds them.
     pub endpoints: Option<String>,
 }
 
@@ -62,9 +63,13 @@ pub struct SegmentForm {
     /// The photograph, JPEG or PNG.
     #[schema(value_type = String, format = Binary)]
     image: Vec<u8>,
-    /// Cable ends as JSON `[[x, y], ...]`, pixels; when given, detection is skipped.
+    /// Cable ends as JSON `[[x, y], ...]`, pixels; absent or empty: the network finds
+    /// them.
+    #[schema(example = "")]
     endpoints: Option<String>,
-    /// Parameter overrides as a JSON object, e.g. `{"n_segments": 1500}`.
+    /// Parameter overrides as a JSON object, e.g. `{"n_segments": 1500}`; absent or
+    /// empty: none.
+    #[schema(example = "")]
     options: Option<String>,
 }
 
