@@ -100,8 +100,14 @@ fn the_network_segments_the_development_split() {
     assert!(hard_iou >= TRUE_ENDS.1, "hard {hard_iou:.3}");
 }
 
+/// A development photo, as an absolute path.
+fn dataset_photo() -> std::path::PathBuf {
+    let dir = eval::default_dataset_dir().join("simple/00000.jpg");
+    std::fs::canonicalize(&dir).unwrap_or(dir)
+}
+
 /// `ariadne serve` with a bad model or runtime stops at once with a message saying what
-/// is wrong, before it listens.
+/// is wrong, before it listens; the bundled model is found from any working directory.
 #[test]
 fn bad_model_or_runtime_stops_the_service_at_start_up() {
     let dir = std::env::temp_dir().join(format!("ariadne-detector-{}", std::process::id()));
@@ -110,13 +116,27 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
     std::fs::write(&corrupt, b"this is not a protobuf").unwrap();
     let missing = dir.join("missing.onnx");
     let cases: [(&[&str], &str); 3] = [
-        (&["--model", missing.to_str().unwrap()], "no such file"),
+        (
+            &["--model", missing.to_str().unwrap()],
+            "not found (looked at",
+        ),
         (&["--model", corrupt.to_str().unwrap()], "corrupt.onnx"),
         (
             &["--ort-library", "/nonexistent/libonnxruntime.so.1.31.1"],
             "make setup",
         ),
     ];
+    let elsewhere = Command::new(env!("CARGO_BIN_EXE_ariadne"))
+        .args(["segment", "--json", "-"])
+        .arg(dataset_photo())
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        elsewhere.status.success(),
+        "{}",
+        String::from_utf8_lossy(&elsewhere.stderr)
+    );
     for (flags, expected) in cases {
         let out = Command::new(env!("CARGO_BIN_EXE_ariadne"))
             .args(["serve", "--bind", "127.0.0.1:0"])

@@ -8,6 +8,7 @@
 //!   per worker.
 
 pub mod field;
+pub mod locate;
 mod onnx;
 pub mod output;
 
@@ -18,7 +19,8 @@ use image::RgbImage;
 
 use crate::engine::CableField;
 
-pub use onnx::{OnnxDetector, default_runtime_candidates};
+pub use locate::default_runtime_candidates;
+pub use onnx::OnnxDetector;
 
 /// One detected end, photo pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,7 +1,7 @@
 //! ONNX Runtime back end: the shared library is loaded at run time (`load-dynamic`),
 //! and each worker gets a session of its own, since `Session::run` needs `&mut`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
@@ -11,30 +11,13 @@ use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
 use super::output::{self, Decoding, Letterbox};
-use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field};
+use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field, locate};
 
-/// File name of the ONNX Runtime library this build is made for.
-const RUNTIME_FILE: &str = "libonnxruntime.so.1.31.1";
 /// The photo size (640x480) the configured input size of a model with free input
 /// sides is meant for: working images of other sizes are scaled alike.
 const REFERENCE_PIXELS: f64 = 640.0 * 480.0;
 /// Grey the padding of a letterboxed input is filled with.
 const PAD: f32 = 0.5;
-
-/// Where the runtime library is looked for when no path is configured, in order:
-/// `.ort/` under the working directory (`make setup`), next to the executable,
-/// `/usr/local/lib` (the container image).
-pub fn default_runtime_candidates() -> Vec<PathBuf> {
-    let mut paths = vec![Path::new(".ort").join(RUNTIME_FILE)];
-    if let Some(dir) = std::env::current_exe()
-        .ok()
-        .and_then(|e| e.parent().map(Path::to_owned))
-    {
-        paths.push(dir.join(RUNTIME_FILE));
-    }
-    paths.push(Path::new("/usr/local/lib").join(RUNTIME_FILE));
-    paths
-}
 
 /// The size a photo is fed to the network at.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,12 +89,16 @@ impl OnnxDetector {
     pub fn load(config: &DetectorConfig, sessions: usize) -> Result<Self, DetectError> {
         config.validate().map_err(DetectError::Settings)?;
         let environment = runtime(config.ort_library.as_deref())?;
-        if !config.model.is_file() {
-            return Err(DetectError::Model {
+        let model = locate::first_file(&locate::candidates(&config.model))
+            .map_err(|e| DetectError::Model {
                 path: config.model.clone(),
-                message: "no such file (set --model / ARIADNE_MODEL)".into(),
-            });
-        }
+                message: format!("{e}; set --model / ARIADNE_MODEL"),
+            })?
+            .clone();
+        let config = &DetectorConfig {
+            model,
+            ..config.clone()
+        };
         let sessions = (0..sessions.max(1))
             .map(|_| build_session(environment, config).map(Mutex::new))
             .collect::<Result<Vec<_>, _>>()?;
@@ -298,15 +285,14 @@ fn runtime(
     }
     let candidates = match configured {
         Some(path) => vec![path.to_owned()],
-        None => default_runtime_candidates(),
+        None => locate::default_runtime_candidates(),
     };
-    let Some(library) = candidates.iter().find(|p| p.is_file()) else {
-        let looked: Vec<_> = candidates.iter().map(|p| p.display().to_string()).collect();
-        return Err(DetectError::Runtime(format!(
-            "{RUNTIME_FILE} not found (looked at {}): run `make setup`, or point ORT_DYLIB_PATH / --ort-library at it",
-            looked.join(", ")
-        )));
-    };
+    let library = locate::first_file(&candidates).map_err(|e| {
+        DetectError::Runtime(format!(
+            "{} {e}: run `make setup`, or point ORT_DYLIB_PATH / --ort-library at it",
+            locate::RUNTIME_FILE
+        ))
+    })?;
     let environment = ort::init_from(library)
         .map_err(|e| DetectError::Runtime(e.to_string()))?
         .with_name("ariadne")
