@@ -107,7 +107,8 @@ fn dataset_photo() -> std::path::PathBuf {
 }
 
 /// `ariadne serve` with a bad model or runtime stops at once with a message saying what
-/// is wrong, before it listens; the bundled model is found from any working directory.
+/// is wrong, before it listens; the bundled model is found from any working directory,
+/// and `segment --json` embeds only what it did not write to files.
 #[test]
 fn bad_model_or_runtime_stops_the_service_at_start_up() {
     let dir = std::env::temp_dir().join(format!("ariadne-detector-{}", std::process::id()));
@@ -127,7 +128,7 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
         ),
     ];
     let elsewhere = Command::new(env!("CARGO_BIN_EXE_ariadne"))
-        .args(["segment", "--json", "-"])
+        .args(["segment", "--json", "-", "--mask", "m.png", "--overlay", "o.png"])
         .arg(dataset_photo())
         .current_dir(&dir)
         .output()
@@ -137,6 +138,11 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
         "{}",
         String::from_utf8_lossy(&elsewhere.stderr)
     );
+    // What went to files is not embedded in the JSON again.
+    let doc: serde_json::Value = serde_json::from_slice(&elsewhere.stdout).unwrap();
+    assert_eq!(doc["mask_png"], "");
+    assert!(doc.get("overlay_png").is_none());
+    assert!(dir.join("m.png").is_file() && dir.join("o.png").is_file());
     for (flags, expected) in cases {
         let out = Command::new(env!("CARGO_BIN_EXE_ariadne"))
             .args(["serve", "--bind", "127.0.0.1:0"])

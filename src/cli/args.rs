@@ -176,7 +176,8 @@ pub struct SegmentArgs {
     /// Parameter overrides as a JSON object, e.g. '{"n_segments": 1500}'.
     #[arg(long)]
     pub options: Option<String>,
-    /// Write the JSON result here ('-' for standard output).
+    /// Write the JSON result here ('-' for standard output). It embeds the mask and
+    /// the overlay only when they are not written to files (`mask_png` is then "").
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Write the mask PNG here.

@@ -37,7 +37,14 @@ pub fn segment(args: SegmentArgs) -> Result<(), CliError> {
         write(path, png)?;
     }
     if let Some(path) = &args.json {
-        let response = SegmentResponse::new(&out, format!("cli-{}", uuid::Uuid::new_v4()));
+        let mut response = SegmentResponse::new(&out, format!("cli-{}", uuid::Uuid::new_v4()));
+        // What went to a file is not embedded a second time.
+        if args.mask.is_some() {
+            response.mask_png.clear();
+        }
+        if args.overlay.is_some() {
+            response.overlay_png = None;
+        }
         let mut text = serde_json::to_vec_pretty(&response)
             .map_err(|e| CliError::BadOptions(e.to_string()))?;
         text.push(b'\n');
