@@ -604,6 +604,20 @@ async fn hostile_inputs_are_refused_exactly() {
             .to_string();
         assert_eq!(echoed == sent, kept, "{sent} -> {echoed}");
     }
+    // Heads over hyper's limits get its plain answers (documented): 431, empty body.
+    let huge = "x".repeat(100_000);
+    let response = c
+        .get(app.url("/healthz"))
+        .header("x-huge", huge)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 431);
+    let mut many = c.get(app.url("/healthz"));
+    for i in 0..80 {
+        many = many.header(format!("x-h{i}"), "1");
+    }
+    assert_eq!(many.send().await.unwrap().status(), 431);
     // And the server still answers.
     let response = post("")
         .multipart(form(photo(), Some(ends)))

@@ -128,7 +128,15 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
         ),
     ];
     let elsewhere = Command::new(env!("CARGO_BIN_EXE_ariadne"))
-        .args(["segment", "--json", "-", "--mask", "m.png", "--overlay", "o.png"])
+        .args([
+            "segment",
+            "--json",
+            "-",
+            "--mask",
+            "m.png",
+            "--overlay",
+            "o.png",
+        ])
         .arg(dataset_photo())
         .current_dir(&dir)
         .output()

@@ -18,6 +18,13 @@ use super::router::app;
 use super::state::AppState;
 use crate::detect::OnnxDetector;
 
+/// Largest request head (request line and headers), bytes: hyper answers a longer one
+/// 431 (an overlong request line 414), with an empty body. 64 KiB holds the longest
+/// `?endpoints=` the ends limit allows.
+const MAX_HEAD_BYTES: usize = 64 * 1024;
+/// Most headers in one request (hyper answers 431 past it).
+const MAX_HEADERS: usize = 64;
+
 /// Runs one small segmentation on the pool so that the first real request does not pay
 /// for lazy initialisation, then marks the service ready. (The detector has already run
 /// once per session when it was loaded.)
@@ -103,7 +110,9 @@ pub async fn serve(
             let mut builder = http1::Builder::new();
             builder
                 .timer(TokioTimer::new())
-                .header_read_timeout(header_timeout);
+                .header_read_timeout(header_timeout)
+                .max_header_size(MAX_HEAD_BYTES)
+                .max_headers(MAX_HEADERS);
             let connection = builder.serve_connection(TokioIo::new(stream), service);
             let mut connection = pin!(connection);
             tokio::select! {
