@@ -1018,6 +1018,51 @@ async fn readiness_follows_warm_up_and_shutdown_and_drains_in_flight_work() {
     app.stop();
 }
 
+/// When the drain grace runs out, requests that cannot finish are answered 503 JSON
+/// (not dropped with their connection), within the grace.
+#[tokio::test(flavor = "multi_thread")]
+async fn requests_left_when_the_grace_runs_out_get_503() {
+    let mut app = spawn_app(|c| {
+        c.workers = Some(1);
+        c.shutdown_grace_s = 1;
+        c.deadline_ms = 60_000;
+    })
+    .await;
+    // One slow request running and two queued behind it: more than a second of work.
+    let requests: Vec<_> = (0..3)
+        .map(|_| tokio::spawn(slow_request(&app).send()))
+        .collect();
+    wait_until(|| async {
+        metric_value(&app.get_text("/metrics").await, "ariadne_queue_depth", &[]) >= 2.0
+    })
+    .await;
+    let stopped = std::time::Instant::now();
+    app.stop();
+    let mut refused = 0;
+    for request in requests {
+        let response = request
+            .await
+            .unwrap()
+            .expect("an answer, not a dropped connection");
+        // The running one may just make it; the queued ones cannot.
+        if response.status() != 200 {
+            expect_error(response, 503, "shutting_down").await;
+            refused += 1;
+        }
+    }
+    assert!(refused >= 2, "{refused} of 3 refused");
+    tokio::time::timeout(Duration::from_secs(5), app.server)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert!(
+        stopped.elapsed() < Duration::from_millis(1500),
+        "{:?}",
+        stopped.elapsed()
+    );
+}
+
 #[tokio::test(flavor = "multi_thread")]
 async fn openapi_is_served_committed_and_complete() {
     let app = spawn_app(|_| {}).await;

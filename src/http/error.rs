@@ -54,6 +54,8 @@ pub enum ErrorCode {
     QueueFull,
     /// 429: the bodies in memory fill the upload budget.
     UploadBudgetFull,
+    /// 503: the service is shutting down and cannot finish the request.
+    ShuttingDown,
     /// 504: the deadline passed.
     DeadlineExceeded,
     /// 404: no such route.
@@ -87,6 +89,7 @@ impl ErrorCode {
             Self::BodyTimeout => "body_timeout",
             Self::QueueFull => "queue_full",
             Self::UploadBudgetFull => "upload_budget_full",
+            Self::ShuttingDown => "shutting_down",
             Self::DeadlineExceeded => "deadline_exceeded",
             Self::NotFound => "not_found",
             Self::MethodNotAllowed => "method_not_allowed",
@@ -149,6 +152,11 @@ pub enum ApiError {
         /// The configured limit.
         timeout_s: u64,
     },
+    /// The service stopped before the request could be done.
+    #[error(
+        "the service is shutting down and could not finish this request; retry (another replica will answer)"
+    )]
+    ShuttingDown,
     /// The request took longer than its deadline.
     #[error("the request exceeded its deadline of {deadline_ms} ms")]
     DeadlineExceeded {
@@ -199,6 +207,7 @@ impl ApiError {
             Self::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
             Self::Unprocessable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             Self::BodyTimeout { .. } => StatusCode::REQUEST_TIMEOUT,
+            Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             Self::QueueFull { .. } | Self::UploadBudgetFull { .. } => StatusCode::TOO_MANY_REQUESTS,
             Self::DeadlineExceeded { .. } => StatusCode::GATEWAY_TIMEOUT,
             Self::NotFound(_) => StatusCode::NOT_FOUND,
@@ -215,6 +224,7 @@ impl ApiError {
             | Self::Unprocessable { code, .. } => *code,
             Self::UnsupportedMediaType(_) => ErrorCode::UnsupportedMediaType,
             Self::BodyTimeout { .. } => ErrorCode::BodyTimeout,
+            Self::ShuttingDown => ErrorCode::ShuttingDown,
             Self::QueueFull { .. } => ErrorCode::QueueFull,
             Self::UploadBudgetFull { .. } => ErrorCode::UploadBudgetFull,
             Self::DeadlineExceeded { .. } => ErrorCode::DeadlineExceeded,

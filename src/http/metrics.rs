@@ -37,7 +37,7 @@ const PROCESS_RSS: &str = "process_resident_memory_bytes";
 const PROCESS_FDS: &str = "process_open_fds";
 
 /// Every rejection reason: each counter is exported from the start, at 0.
-pub const REJECT_REASONS: [&str; 7] = [
+pub const REJECT_REASONS: [&str; 8] = [
     "body_too_large",
     "body_timeout",
     "too_many_pixels",
@@ -45,6 +45,7 @@ pub const REJECT_REASONS: [&str; 7] = [
     "queue_full",
     "upload_budget",
     "deadline",
+    "shutting_down",
 ];
 
 /// Latency buckets, seconds: 1 ms (endpoint inference) to 30 s.

@@ -128,6 +128,7 @@ enum Output {
         (status = 422, description = "Undecodable or truncated image, ends outside the image or more than --max-endpoints, options out of range", body = ErrorBody),
         (status = 429, description = "Queue full, or the upload budget full; see Retry-After", body = ErrorBody),
         (status = 500, description = "Bug; the server stays up", body = ErrorBody),
+        (status = 503, description = "Shutting down: the drain grace ran out before this request could be done", body = ErrorBody),
         (status = 504, description = "Deadline exceeded", body = ErrorBody),
     ),
     tag = "segmentation"
@@ -161,11 +162,16 @@ pub async fn segment(
         (deadline, deadline_ms),
     )?;
     let span = tracing::Span::current();
+    let stopping = state.giving_up.subscribe();
     let receiver = state
         .pool
         .try_submit(move || {
             let _entered = span.enter();
             let _upload = upload;
+            if *stopping.borrow() {
+                // The handler has answered 503: skip the work.
+                return Err(ApiError::ShuttingDown);
+            }
             if Instant::now() >= deadline {
                 // Nobody is waiting for this answer any more: skip the work.
                 return Err(ApiError::DeadlineExceeded { deadline_ms });
@@ -179,7 +185,21 @@ pub async fn segment(
                 retry_after_s: state.config.retry_after_s,
             }
         })?;
-    let finished = tokio::time::timeout_at(deadline.into(), receiver).await;
+    let mut giving_up = state.giving_up.subscribe();
+    let give_up = async move {
+        loop {
+            if *giving_up.borrow_and_update() || giving_up.changed().await.is_err() {
+                return;
+            }
+        }
+    };
+    let finished = tokio::select! {
+        finished = tokio::time::timeout_at(deadline.into(), receiver) => finished,
+        () = give_up => {
+            metrics::reject("shutting_down");
+            return Err(ApiError::ShuttingDown);
+        }
+    };
     let started_job = match finished {
         Err(_) => {
             metrics::reject("deadline");

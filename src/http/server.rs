@@ -128,11 +128,23 @@ pub async fn serve(
     drop(listener);
     let _ = closing_tx.send(());
     drop(open_rx);
-    if tokio::time::timeout(grace, open_tx.closed()).await.is_err() {
-        tracing::warn!(
-            grace_s = grace.as_secs(),
-            "grace period over; exiting with requests in flight"
-        );
+    // The last quarter of the grace (at most a second) is kept for answering 503 to
+    // the requests that have not finished by then.
+    let answering = (grace / 4).min(Duration::from_secs(1));
+    if tokio::time::timeout(grace - answering, open_tx.closed())
+        .await
+        .is_err()
+    {
+        let _ = state.giving_up.send(true);
+        if tokio::time::timeout(answering, open_tx.closed())
+            .await
+            .is_err()
+        {
+            tracing::warn!(
+                grace_s = grace.as_secs(),
+                "grace period over; exiting with connections open"
+            );
+        }
     }
     Ok(())
 }

@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
-use tokio::sync::Semaphore;
+use tokio::sync::{Semaphore, watch};
 
 use super::config::{Presets, ServeConfig};
 use super::pool::WorkerPool;
@@ -35,6 +35,9 @@ pub struct Inner {
     pub closed_at: OnceLock<Instant>,
     /// The upload budget, one permit per KiB ([`UPLOAD_UNIT`] bytes).
     pub uploads: Arc<Semaphore>,
+    /// Set when the drain grace is about to run out: requests still waiting are
+    /// answered 503 while their connections can still carry it.
+    pub giving_up: watch::Sender<bool>,
 }
 
 /// Bytes per permit of [`Inner::uploads`].
@@ -64,6 +67,7 @@ impl AppState {
             ready: AtomicBool::new(false),
             draining: AtomicBool::new(false),
             closed_at: OnceLock::new(),
+            giving_up: watch::Sender::new(false),
             uploads: Arc::new(Semaphore::new(
                 config_budget
                     .div_ceil(UPLOAD_UNIT)
