@@ -187,6 +187,27 @@ fn manifests_match_the_code() {
         "terminationGracePeriodSeconds {grace} < {needed}"
     );
 
+    // Memory: the upload budget, plus per worker the largest decoded photo (RGB) and its
+    // mask, plus 128 MiB for the process and the model, fit the limit.
+    let limit = container["resources"]["limits"]["memory"].as_str().unwrap();
+    let limit_bytes: u64 = limit.strip_suffix("Gi").unwrap().parse::<u64>().unwrap() << 30;
+    let workers = container["env"]
+        .as_sequence()
+        .unwrap()
+        .iter()
+        .any(|e| e["name"] == "ARIADNE_WORKERS");
+    assert!(workers, "the worker count comes from the CPU limit");
+    let cpus: u64 = container["resources"]["limits"]["cpu"]
+        .as_str()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let needed = parsed.upload_budget_bytes as u64 + cpus * parsed.max_pixels * 4 + (128 << 20);
+    assert!(
+        needed <= limit_bytes,
+        "memory limit {limit} < {needed} bytes needed"
+    );
+
     // Requests equal limits; security context as required.
     assert_eq!(
         container["resources"]["requests"],
