@@ -116,12 +116,20 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
     let corrupt = dir.join("corrupt.onnx");
     std::fs::write(&corrupt, b"this is not a protobuf").unwrap();
     let missing = dir.join("missing.onnx");
-    let cases: [(&[&str], &str); 3] = [
+    // Inputs the service cannot feed (scripts/make-test-models.py).
+    let one_side = std::fs::canonicalize("tests/models/one_side_fixed.onnx").unwrap();
+    let gray = std::fs::canonicalize("tests/models/one_channel.onnx").unwrap();
+    let cases: [(&[&str], &str); 5] = [
         (
             &["--model", missing.to_str().unwrap()],
             "not found (looked at",
         ),
         (&["--model", corrupt.to_str().unwrap()], "corrupt.onnx"),
+        (
+            &["--model", one_side.to_str().unwrap()],
+            "both sides fixed or both free",
+        ),
+        (&["--model", gray.to_str().unwrap()], "has 1 channels"),
         (
             &["--ort-library", "/nonexistent/libonnxruntime.so.1.31.1"],
             "make setup",

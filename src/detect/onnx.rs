@@ -36,22 +36,31 @@ enum InputSize {
 
 impl InputSize {
     /// The size declared by `session`'s first input (`[1, 3, H, W]`, a dimension < 1
-    /// being free), else the configured size's scale at the model kind's stride.
-    fn of(session: &Session, config: &DetectorConfig) -> Self {
+    /// being free), else the configured size's scale at the model kind's stride. An
+    /// input of another rank or channel count, or with one side fixed and the other
+    /// free, cannot be fed: a one-line error naming the shape.
+    fn of(session: &Session, config: &DetectorConfig) -> Result<Self, String> {
         let declared = session
             .inputs()
             .first()
             .and_then(|input| input.dtype().tensor_shape())
             .map(|shape| shape.to_vec())
             .unwrap_or_default();
+        let free = |d: i64| d < 1;
         match declared[..] {
-            [_, _, h, w] if h > 0 && w > 0 => Self::Fixed([w as usize, h as usize]),
-            _ => Self::Dynamic {
+            [_, c, _, _] if c > 0 && c != 3 => Err(format!(
+                "the model's input {declared:?} has {c} channels; it must take RGB ([1, 3, H, W])"
+            )),
+            [_, _, h, w] if h > 0 && w > 0 => Ok(Self::Fixed([w as usize, h as usize])),
+            [_, _, h, w] if free(h) && free(w) => Ok(Self::Dynamic {
                 scale: ((config.model_input_width * config.model_input_height) as f64
                     / REFERENCE_PIXELS)
                     .sqrt(),
                 stride: config.model_kind.stride(),
-            },
+            }),
+            _ => Err(format!(
+                "the model's input {declared:?} is not [1, 3, H, W] with both sides fixed or both free; export it so"
+            )),
         }
     }
 
@@ -105,7 +114,11 @@ impl OnnxDetector {
         let input = InputSize::of(
             &sessions[0].lock().unwrap_or_else(PoisonError::into_inner),
             config,
-        );
+        )
+        .map_err(|message| DetectError::Model {
+            path: config.model.clone(),
+            message,
+        })?;
         let detector = Self {
             sessions,
             next: AtomicUsize::new(0),
