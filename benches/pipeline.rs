@@ -92,18 +92,7 @@ fn segment_with_detection_by_size(bencher: divan::Bencher, size: (u32, u32)) {
     let mut i = 0;
     bencher.bench_local(|| {
         i += 1;
-        pipeline::run(&pipeline::Job {
-            bytes: &photos[i % photos.len()],
-            ends: None,
-            network: Some(&detector),
-            params: &p,
-            max_pixels: u64::MAX,
-            mask: MaskKind::Binary,
-            overlay: false,
-            encode: true,
-            deadline: ariadne_dlo::engine::Deadline::NONE,
-        })
-        .unwrap()
+        service_path(&photos[i % photos.len()], None, Some(&detector), &p)
     });
 }
 
@@ -122,23 +111,30 @@ fn bench_segment(bencher: divan::Bencher, detector: Option<&dyn EndpointDetector
     bencher.bench_local(|| {
         let f = &fx[i % fx.len()];
         i += 1;
-        pipeline::run(&pipeline::Job {
-            bytes: &f.jpeg,
-            ends: if detector.is_some() {
-                None
-            } else {
-                Some(&f.ends)
-            },
-            network: detector,
-            params: &p,
-            max_pixels: u64::MAX,
-            mask: MaskKind::Binary,
-            overlay: false,
-            encode: true,
-            deadline: ariadne_dlo::engine::Deadline::NONE,
-        })
-        .unwrap()
+        let ends = detector.is_none().then_some(&f.ends[..]);
+        service_path(&f.jpeg, ends, detector, &p)
     });
+}
+
+/// The service's path for one photo: the pipeline to a binary mask PNG.
+fn service_path(
+    bytes: &[u8],
+    ends: Option<&[[f64; 2]]>,
+    network: Option<&dyn EndpointDetector>,
+    params: &Params,
+) -> pipeline::Output {
+    pipeline::run(&pipeline::Job {
+        bytes,
+        ends,
+        network,
+        params,
+        max_pixels: u64::MAX,
+        mask: MaskKind::Binary,
+        overlay: false,
+        encode: true,
+        deadline: ariadne_dlo::engine::Deadline::NONE,
+    })
+    .unwrap()
 }
 
 /// The engine's first step: Lab planes, blurred.

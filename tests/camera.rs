@@ -41,13 +41,18 @@ fn with_exif_orientation(jpeg: &[u8], orientation: u16) -> Vec<u8> {
     out
 }
 
-/// The pipeline on `bytes` with the given ends and no network.
+/// The pipeline on `bytes` with the given ends, no network and the default parameters.
 fn run(bytes: &[u8], ends: &[[f64; 2]]) -> Output {
+    run_with(bytes, ends, &Params::default())
+}
+
+/// [`run`] with `params`.
+fn run_with(bytes: &[u8], ends: &[[f64; 2]], params: &Params) -> Output {
     pipeline::run(&Job {
         bytes,
         ends: Some(ends),
         network: None,
-        params: &Params::default(),
+        params,
         max_pixels: u64::MAX,
         mask: MaskKind::Binary,
         overlay: false,
@@ -241,21 +246,11 @@ fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
             (0.3..0.75).contains(&scale),
             "seed {seed}: working scale {scale}"
         );
-        let fixed = pipeline::run(&Job {
-            bytes: &bytes,
-            ends: Some(&truth.ends()),
-            network: None,
-            params: &Params {
-                width_tolerance: 100.0,
-                ..Params::default()
-            },
-            max_pixels: u64::MAX,
-            mask: MaskKind::Binary,
-            overlay: false,
-            encode: false,
-            deadline: ariadne_dlo::engine::Deadline::NONE,
-        })
-        .unwrap();
+        let no_correction = Params {
+            width_tolerance: 100.0,
+            ..Params::default()
+        };
+        let fixed = run_with(&bytes, &truth.ends(), &no_correction);
         assert_eq!(fixed.segmentation.working_scale, 1.0);
         let corrected = mask_iou(&out, &truth.mask);
         let uncorrected = mask_iou(&fixed, &truth.mask);
