@@ -1,5 +1,5 @@
 # The two commands: `make run` serves on the bundled defaults; `make test` runs everything.
-.PHONY: setup run test lint bench eval eval-detect lobo train-field openapi deploy-check
+.PHONY: setup run test lint bench eval eval-detect lobo train-field openapi deploy-check browser-test
 
 # ONNX Runtime's shared library, from the PyPI wheel, into .ort/ (idempotent).
 setup:
@@ -11,6 +11,11 @@ run: setup
 # --release: one optimised build shared with `make run` and `cargo bench`.
 test: setup lint deploy-check
 	cargo test --release --all-targets
+	scripts/browser-test.sh
+
+# The page at GET / in headless Chromium (installs chromium and selenium if missing).
+browser-test:
+	scripts/browser-test.sh
 
 lint:
 	cargo fmt --check

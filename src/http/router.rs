@@ -11,7 +11,7 @@ use utoipa_swagger_ui::SwaggerUi;
 
 use super::error::ApiError;
 use super::state::AppState;
-use super::{health, metrics, request_id, segment};
+use super::{health, metrics, page, request_id, segment};
 
 #[derive(OpenApi)]
 #[openapi(
@@ -55,6 +55,7 @@ pub fn app(state: AppState) -> Router {
     let body_limit = state.config.max_body_bytes;
     router
         .merge(SwaggerUi::new("/docs").url("/openapi.json", api))
+        .route("/", axum::routing::get(page::index))
         .fallback(not_found)
         .method_not_allowed_fallback(method_not_allowed)
         .route_layer(middleware::from_fn_with_state(
