@@ -42,9 +42,10 @@ def main():
     ap.add_argument("--binary", default="target/release/ariadne")
     ap.add_argument("--models", default="out/field-{group}.onnx")
     ap.add_argument("--options", default=None)
+    ap.add_argument("--groups", default=",".join(GROUPS), help="comma-separated subset")
     args = ap.parse_args()
     rows = {}
-    for group in GROUPS:
+    for group in args.groups.split(","):
         cmd = [args.binary, "eval", "--json", "--endpoints", args.endpoints,
                "--model", args.models.format(group=group)]
         if args.options:

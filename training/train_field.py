@@ -39,6 +39,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 import scenes
+from backbone import LiteFieldNet
 from groups import GROUPS
 
 STRIDE = 4
@@ -219,6 +220,9 @@ def main():
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--lr", type=float, default=4e-3)
     ap.add_argument("--width", type=int, default=32, help="channels of the body")
+    ap.add_argument("--backbone", choices=["none", "lite0"], default="none",
+                    help="lite0: EfficientNet-Lite0's first stages, ImageNet weights "
+                         "(training/backbone.py)")
     ap.add_argument("--real", type=float, default=0.25, help="share of unmodified photos")
     ap.add_argument("--composed", type=float, default=0.45,
                     help="share of photo cables on procedural backgrounds")
@@ -245,10 +249,22 @@ def main():
     held = [p for p in photos if p.group == args.holdout]
     print(f"train {len(train)} photos; held out ({args.holdout}): {len(held)}", flush=True)
 
-    model = FieldNet(args.width)
+    if args.backbone == "lite0":
+        model = LiteFieldNet(CHANNELS, args.width)
+        model.load_pretrained()
+        model.freeze_early()
+        # the pretrained blocks that train move at a quarter of the new layers' rate
+        tuned = [p for n, p in model.named_parameters()
+                 if p.requires_grad and n.startswith("_blocks.")]
+        fresh = [p for n, p in model.named_parameters()
+                 if p.requires_grad and not n.startswith("_blocks.")]
+        param_groups, peaks = [{"params": tuned}, {"params": fresh}], [args.lr / 4, args.lr]
+    else:
+        model = FieldNet(args.width)
+        param_groups, peaks = [{"params": list(model.parameters())}], [args.lr]
     n_params = sum(p.numel() for p in model.parameters())
-    opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=args.steps)
+    opt = torch.optim.AdamW(param_groups, lr=args.lr, weight_decay=1e-4)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=peaks, total_steps=args.steps)
     history, start, window = [], time.time(), []
     stream = iter(torch.utils.data.DataLoader(
         SceneStream(train, args), batch_size=None, num_workers=args.workers))

@@ -84,13 +84,22 @@ pub enum ModelKind {
 }
 
 impl ModelKind {
-    /// What a free input side must be a multiple of: the model's output stride (the
-    /// cable field's 4, a heatmap's 8 at most, YOLO's 32).
+    /// What a free input side must be a multiple of: the model's deepest stride (8 for
+    /// the cable field, whose stride-8 features are upsampled onto its stride-4 grid; a
+    /// heatmap's 8 at most, YOLO's 32).
     pub fn stride(self) -> usize {
         match self {
-            Self::Field => 4,
-            Self::Heatmap => 8,
+            Self::Field | Self::Heatmap => 8,
             Self::Yolo => 32,
+        }
+    }
+
+    /// The grey padding is filled with, in [0, 1]: ultralytics' 114 for YOLO (whose
+    /// letterbox is also centred), mid-grey for the others.
+    pub fn padding_grey(self) -> f32 {
+        match self {
+            Self::Field | Self::Heatmap => 0.5,
+            Self::Yolo => 114.0 / 255.0,
         }
     }
 }

@@ -10,14 +10,12 @@ use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
-use super::output::{self, Decoding, Letterbox};
+use super::output::{self, Decoding, Letterbox, YoloLayout};
 use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field, locate};
 
 /// The photo size (640x480) the configured input size of a model with free input
 /// sides is meant for: working images of other sizes are scaled alike.
 const REFERENCE_PIXELS: f64 = 640.0 * 480.0;
-/// Grey the padding of a letterboxed input is filled with.
-const PAD: f32 = 0.5;
 
 /// The size a photo is fed to the network at.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,6 +78,8 @@ pub struct OnnxDetector {
     kind: ModelKind,
     input: InputSize,
     decoding: Decoding,
+    /// How a YOLO model lays out its boxes (from its metadata).
+    layout: YoloLayout,
 }
 
 impl std::fmt::Debug for OnnxDetector {
@@ -88,6 +88,7 @@ impl std::fmt::Debug for OnnxDetector {
             .field("sessions", &self.sessions.len())
             .field("kind", &self.kind)
             .field("input", &self.input)
+            .field("layout", &self.layout)
             .finish()
     }
 }
@@ -119,8 +120,15 @@ impl OnnxDetector {
             path: config.model.clone(),
             message,
         })?;
+        let layout = {
+            let session = sessions[0].lock().unwrap_or_else(PoisonError::into_inner);
+            let metadata = session.metadata().ok();
+            let entry = |key: &str| metadata.as_ref().and_then(|m| m.custom(key));
+            YoloLayout::from_metadata(entry("end2end").as_deref(), entry("args").as_deref())
+        };
         let detector = Self {
             sessions,
+            layout,
             next: AtomicUsize::new(0),
             kind: config.model_kind,
             input,
@@ -151,7 +159,11 @@ impl OnnxDetector {
     /// Resizes `image` into the input, runs `session` and decodes its output.
     fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Perception, DetectError> {
         let fit = self.input.fit(image.width(), image.height());
-        let tensor = input_tensor(image, fit);
+        let fit = match self.kind {
+            ModelKind::Yolo => fit.centred(),
+            ModelKind::Field | ModelKind::Heatmap => fit,
+        };
+        let tensor = input_tensor(image, fit, self.kind.padding_grey());
         let [w, h] = fit.input;
         let input = TensorRef::from_array_view(([1usize, 3, h, w], tensor.as_slice()))
             .map_err(|e| DetectError::Inference(e.to_string()))?;
@@ -165,7 +177,9 @@ impl OnnxDetector {
         match self.kind {
             ModelKind::Field => field::decode(shape, data, fit, self.decoding),
             ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding).map(ends_only),
-            ModelKind::Yolo => output::yolo(shape, data, fit, self.decoding).map(ends_only),
+            ModelKind::Yolo => {
+                output::yolo(shape, data, fit, self.decoding, self.layout).map(ends_only)
+            }
         }
     }
 
@@ -223,8 +237,9 @@ fn build_session(
 /// Separable triangle filter stretched by the reduction factor (antialiased bilinear,
 /// as PIL, which made the training inputs, and `image` do), computed in f32 straight
 /// into the planar tensor: no intermediate 8-bit image.
-fn input_tensor(image: &RgbImage, fit: Letterbox) -> Vec<f32> {
+fn input_tensor(image: &RgbImage, fit: Letterbox, pad: f32) -> Vec<f32> {
     let [w, h] = fit.input;
+    let [left, top] = fit.offset;
     let [rw, rh] = fit.resized().map(|v| v as usize);
     let (sw, sh) = (image.width() as usize, image.height() as usize);
     let columns = triangle_weights(sw, rw);
@@ -246,11 +261,12 @@ fn input_tensor(image: &RgbImage, fit: Letterbox) -> Vec<f32> {
         }
     }
     // Vertical pass into the padded input, a whole row at a time.
-    let mut tensor = vec![PAD; 3 * w * h];
+    let mut tensor = vec![pad; 3 * w * h];
     for c in 0..3 {
         let plane = &narrow[c * sh * rw..(c + 1) * sh * rw];
         for (y, (first, weights)) in rows.iter().enumerate() {
-            let out = &mut tensor[c * w * h + y * w..c * w * h + y * w + rw];
+            let row = c * w * h + (top + y) * w + left;
+            let out = &mut tensor[row..row + rw];
             out.fill(0.0);
             for (k, &wk) in weights.iter().enumerate() {
                 let src = &plane[(first + k) * rw..(first + k + 1) * rw];
@@ -324,7 +340,7 @@ mod tests {
             image::Rgb([(x * 4) as u8, (y * 5) as u8, ((x * y) % 256) as u8])
         });
         let fit = Letterbox::fit(64, 48, [32, 24]);
-        let ours = input_tensor(&image, fit);
+        let ours = input_tensor(&image, fit, 0.5);
         let reference =
             image::imageops::resize(&image, 32, 24, image::imageops::FilterType::Triangle);
         for (i, px) in reference.pixels().enumerate() {
@@ -344,7 +360,7 @@ mod tests {
         let mut image = RgbImage::from_pixel(4, 2, image::Rgb([255, 0, 51]));
         image.put_pixel(3, 1, image::Rgb([0, 255, 0]));
         let fit = Letterbox::fit(4, 2, [4, 4]);
-        let t = input_tensor(&image, fit);
+        let t = input_tensor(&image, fit, 0.5);
         assert_eq!(t.len(), 3 * 16);
         assert_eq!([t[0], t[16], t[32]], [1.0, 0.0, 0.2]);
         assert_eq!(
@@ -353,8 +369,23 @@ mod tests {
             "pixel (3, 1)"
         );
         assert!(
-            t[8..16].iter().all(|&v| v == PAD),
+            t[8..16].iter().all(|&v| v == 0.5),
             "rows 2 and 3 are padding"
+        );
+    }
+
+    #[test]
+    fn a_centred_fit_pads_both_sides_with_the_given_grey() {
+        let image = RgbImage::from_pixel(4, 2, image::Rgb([255, 255, 255]));
+        let fit = Letterbox::fit(4, 2, [4, 4]).centred();
+        assert_eq!(fit.offset, [0, 1]);
+        let grey = ModelKind::Yolo.padding_grey();
+        let t = input_tensor(&image, fit, grey);
+        let rows: Vec<f32> = (0..4).map(|y| t[y * 4]).collect();
+        assert_eq!(
+            rows,
+            [grey, 1.0, 1.0, grey],
+            "row 0 and row 3 pad, 1 and 2 hold the photo"
         );
     }
 }

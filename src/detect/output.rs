@@ -4,7 +4,7 @@
 use super::{DetectError, Detection};
 
 /// How the photo was fitted into the network input: resized by `scale_x`, `scale_y`
-/// and placed at the input's top-left corner (the rest is padding).
+/// and placed `offset` pixels from the input's top-left corner (the rest is padding).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Letterbox {
     /// Network input width and height, pixels.
@@ -15,6 +15,8 @@ pub struct Letterbox {
     pub scale_x: f64,
     /// Input pixels per photo pixel, vertically.
     pub scale_y: f64,
+    /// Left and top padding, input pixels (0 unless [`Letterbox::centred`]).
+    pub offset: [usize; 2],
 }
 
 impl Letterbox {
@@ -29,6 +31,18 @@ impl Letterbox {
             image: [width, height],
             scale_x: rw as f64 / width as f64,
             scale_y: rh as f64 / height as f64,
+            offset: [0, 0],
+        }
+    }
+
+    /// The same fit with the photo centred in the input, as ultralytics letterboxes
+    /// (half the padding on each side, the odd pixel right and below).
+    pub fn centred(self) -> Self {
+        let [rw, rh] = self.resized();
+        let half = |input: usize, resized: u32| (input - resized as usize) / 2;
+        Self {
+            offset: [half(self.input[0], rw), half(self.input[1], rh)],
+            ..self
         }
     }
 
@@ -53,9 +67,11 @@ impl Letterbox {
 
     /// Input coordinates to photo coordinates; `None` in the padding.
     fn to_image(self, x: f64, y: f64) -> Option<[f64; 2]> {
-        let (px, py) = (x / self.scale_x, y / self.scale_y);
+        let px = (x - self.offset[0] as f64) / self.scale_x;
+        let py = (y - self.offset[1] as f64) / self.scale_y;
         let (w, h) = (self.image[0] as f64, self.image[1] as f64);
-        (px < w + 0.5 && py < h + 0.5).then(|| [px.clamp(0.0, w - 1.0), py.clamp(0.0, h - 1.0)])
+        let inside = |v: f64, size: f64| v > -0.5 && v < size + 0.5;
+        (inside(px, w) && inside(py, h)).then(|| [px.clamp(0.0, w - 1.0), py.clamp(0.0, h - 1.0)])
     }
 }
 
@@ -127,29 +143,59 @@ fn local_maximum(heat: &[f32], w: usize, h: usize, x: usize, y: usize) -> bool {
         .all(|ny| (x.saturating_sub(1)..(x + 2).min(w)).all(|nx| heat[ny * w + nx] <= p))
 }
 
-/// Decodes an ultralytics YOLO detection output `[1, 4 + classes, N]` (or its transpose
-/// `[1, N, 4 + classes]`): box centre and size in input pixels, then one score per
-/// class. Each box's centre becomes an end with its best class score.
+/// How an ultralytics YOLO export lays out its detections.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum YoloLayout {
+    /// The raw head: `[1, 4 + classes, N]` (or its transpose), box centre and size in
+    /// input pixels, then one score per class.
+    Raw,
+    /// Already suppressed (`nms=True` exports, end-to-end heads such as YOLO26's):
+    /// `[1, N, 6]`, rows of x1, y1, x2, y2, score, class in input pixels.
+    EndToEnd,
+}
+
+impl YoloLayout {
+    /// The layout ultralytics records in the model's metadata: its `end2end` entry,
+    /// or `'nms': True` in its export `args`. A model without them is taken as raw.
+    pub fn from_metadata(end2end: Option<&str>, args: Option<&str>) -> Self {
+        let nms = args.is_some_and(|a| a.replace(' ', "").contains("'nms':True"));
+        if end2end.is_some_and(|e| e.eq_ignore_ascii_case("true")) || nms {
+            Self::EndToEnd
+        } else {
+            Self::Raw
+        }
+    }
+}
+
+/// Decodes an ultralytics YOLO detection output of the given layout. Each box's centre
+/// becomes an end with its (best class) score. Scores outside 0..=1 mean the layout is
+/// not the one assumed: an error, not ends at nonsense places.
 pub fn yolo(
     shape: &[i64],
     data: &[f32],
     fit: Letterbox,
     decoding: Decoding,
+    layout: YoloLayout,
 ) -> Result<Vec<Detection>, DetectError> {
     let [1, a, b] = *shape else {
         return Err(DetectError::Output(format!(
-            "a YOLO model must output [1, 4 + classes, N], got {shape:?}"
+            "a YOLO model must output [1, 4 + classes, N] or [1, N, 6], got {shape:?}"
         )));
     };
     let (a, b) = (a as usize, b as usize);
-    if data.len() != a * b || a.min(b) < 5 {
+    let too_few = match layout {
+        YoloLayout::Raw => a.min(b) < 5,
+        YoloLayout::EndToEnd => b < 6,
+    };
+    if data.len() != a * b || too_few {
         return Err(DetectError::Output(format!(
-            "YOLO output of shape {shape:?} holds {} values or has no class scores",
+            "YOLO output of shape {shape:?} holds {} values or has no scores",
             data.len()
         )));
     }
-    // Ultralytics exports attributes first; a transposed export has more rows than columns.
-    let transposed = a > b;
+    // Ultralytics exports the raw head attributes first; a transposed export has more
+    // rows than columns. End-to-end rows are boxes.
+    let transposed = layout == YoloLayout::EndToEnd || a > b;
     let (attributes, boxes) = if transposed { (b, a) } else { (a, b) };
     let at = |attr: usize, i: usize| {
         if transposed {
@@ -160,11 +206,27 @@ pub fn yolo(
     };
     let mut found = Vec::new();
     for i in 0..boxes {
-        let confidence = (4..attributes).map(|c| at(c, i)).fold(f32::MIN, f32::max);
+        let (confidence, centre) = match layout {
+            YoloLayout::Raw => (
+                (4..attributes).map(|c| at(c, i)).fold(f32::MIN, f32::max),
+                [at(0, i), at(1, i)],
+            ),
+            YoloLayout::EndToEnd => (
+                at(4, i),
+                [(at(0, i) + at(2, i)) / 2.0, (at(1, i) + at(3, i)) / 2.0],
+            ),
+        };
+        if !(0.0..=1.0).contains(&confidence) {
+            return Err(DetectError::Output(format!(
+                "YOLO output {shape:?} read as {layout:?} gives a score of {}: not that layout \
+                 (an nms=True or end-to-end export must keep ultralytics' metadata)",
+                crate::engine::compact(confidence as f64)
+            )));
+        }
         if confidence < decoding.threshold {
             continue;
         }
-        if let Some(point) = fit.to_image(at(0, i) as f64, at(1, i) as f64) {
+        if let Some(point) = fit.to_image(centre[0] as f64, centre[1] as f64) {
             found.push(Detection { point, confidence });
         }
     }
@@ -270,8 +332,11 @@ mod tests {
         let fit = Letterbox::fit(64, 48, [32, 24]);
         assert!(heatmap(&[1, 2, 6, 8], &[0.0; 96], fit, DECODING).is_err());
         assert!(heatmap(&[1, 1, 6, 8], &[0.0; 10], fit, DECODING).is_err());
-        assert!(yolo(&[1, 4, 10], &[0.0; 40], fit, DECODING).is_err());
-        assert!(yolo(&[1, 6, 10, 1], &[0.0; 60], fit, DECODING).is_err());
+        assert!(yolo(&[1, 4, 10], &[0.0; 40], fit, DECODING, YoloLayout::Raw).is_err());
+        for layout in [YoloLayout::Raw, YoloLayout::EndToEnd] {
+            assert!(yolo(&[1, 6, 10, 1], &[0.0; 60], fit, DECODING, layout).is_err());
+        }
+        assert!(yolo(&[1, 10, 5], &[0.0; 50], fit, DECODING, YoloLayout::EndToEnd).is_err());
     }
 
     /// YOLO output for boxes (cx, cy, w, h, score class 0, score class 1), input pixels.
@@ -299,9 +364,55 @@ mod tests {
         let fit = Letterbox::fit(1280, 960, [640, 480]);
         for transposed in [false, true] {
             let (shape, data) = yolo_tensor(&boxes, transposed);
-            let ends = yolo(&shape, &data, fit, DECODING).unwrap();
+            let ends = yolo(&shape, &data, fit, DECODING, YoloLayout::Raw).unwrap();
             let points: Vec<_> = ends.iter().map(|e| (e.point, e.confidence)).collect();
             assert_eq!(points, [([200.0, 100.0], 0.9), ([600.0, 400.0], 0.5)]);
         }
+    }
+
+    #[test]
+    fn end_to_end_rows_are_boxes_with_a_score_and_a_class() {
+        // x1, y1, x2, y2, score, class in a centred 640x640 letterbox of a 1280x960 photo
+        // (80 px of padding above and below).
+        let boxes = [
+            [95.0, 125.0, 105.0, 135.0, 0.9, 0.0],
+            [290.0, 270.0, 310.0, 290.0, 0.5, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0], // an empty slot
+        ];
+        let fit = Letterbox::fit(1280, 960, [640, 640]).centred();
+        let (shape, data) = yolo_tensor(&boxes, true);
+        let ends = yolo(&shape, &data, fit, DECODING, YoloLayout::EndToEnd).unwrap();
+        let points: Vec<_> = ends.iter().map(|e| (e.point, e.confidence)).collect();
+        assert_eq!(points, [([200.0, 100.0], 0.9), ([600.0, 400.0], 0.5)]);
+    }
+
+    #[test]
+    fn a_layout_misread_is_an_error_not_ends() {
+        // An end-to-end output read as a transposed raw head: the class index (3) is
+        // taken for a score.
+        let boxes = [[95.0, 45.0, 105.0, 55.0, 0.9, 3.0]; 8];
+        let (shape, data) = yolo_tensor(&boxes, true);
+        let fit = Letterbox::fit(640, 480, [640, 480]);
+        let err = yolo(&shape, &data, fit, DECODING, YoloLayout::Raw).unwrap_err();
+        assert!(err.to_string().contains("score of 3:"), "{err}");
+    }
+
+    #[test]
+    fn the_layout_is_read_from_ultralytics_metadata() {
+        let raw = "{'batch': 1, 'nms': None, 'dynamic': False}";
+        let nms = "{'batch': 1, 'nms': True, 'dynamic': False}";
+        assert_eq!(
+            YoloLayout::from_metadata(Some("False"), Some(raw)),
+            YoloLayout::Raw
+        );
+        assert_eq!(
+            YoloLayout::from_metadata(Some("False"), Some(nms)),
+            YoloLayout::EndToEnd
+        );
+        assert_eq!(
+            YoloLayout::from_metadata(Some("True"), None),
+            YoloLayout::EndToEnd
+        );
+        assert_eq!(YoloLayout::from_metadata(None, None), YoloLayout::Raw);
     }
 }

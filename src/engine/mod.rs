@@ -36,7 +36,7 @@ use image::RgbImage;
 
 pub use cable::Cable;
 pub use deadline::Deadline;
-pub use error::EngineError;
+pub use error::{EngineError, compact};
 pub use field::CableField;
 pub use params::{PRESET_NAMES, Params, RANGES};
 pub use render::{Mask, MaskKind};
