@@ -6,6 +6,9 @@ use image::{
     DynamicImage, ImageDecoder, ImageFormat, ImageReader, RgbImage, metadata::Orientation,
 };
 use thiserror::Error;
+use zune_core::bytestream::ZCursor;
+use zune_core::colorspace::ColorSpace;
+use zune_core::options::DecoderOptions;
 
 /// Why bytes could not become an RGB image.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -87,8 +90,8 @@ fn turns_sideways(o: Orientation) -> bool {
 
 /// Decodes JPEG or PNG `bytes` to 8-bit RGB as displayed (EXIF orientation applied, so
 /// that coordinates are those a person sees), refusing more than `max_pixels` pixels
-/// before allocating them, and refusing truncated JPEG streams (no end-of-image
-/// marker), which decoders would otherwise fill in silently.
+/// before allocating them, and refusing corrupt or truncated JPEG data (see
+/// [`decode_jpeg`]), which decoders would otherwise fill in silently.
 pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError> {
     let format = sniff(bytes)?;
     let (width, height) = dimensions(bytes)?;
@@ -106,10 +109,15 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
             limit: max_pixels,
         });
     }
-    if format == ImageFormat::Jpeg && !has_jpeg_end(bytes) {
-        return Err(DecodeError::Corrupt(
-            "truncated JPEG (no end-of-image marker)".into(),
-        ));
+    let corrupt = |e: image::ImageError| DecodeError::Corrupt(e.to_string());
+    if format == ImageFormat::Jpeg {
+        let mut header = ImageReader::with_format(Cursor::new(bytes), format)
+            .into_decoder()
+            .map_err(corrupt)?;
+        let upright = orientation(&mut header);
+        let mut img = DynamicImage::ImageRgb8(decode_jpeg(bytes, width.max(height))?);
+        img.apply_orientation(upright);
+        return Ok(img.into_rgb8());
     }
     let mut reader = ImageReader::with_format(Cursor::new(bytes), format);
     let mut limits = image::Limits::default();
@@ -117,7 +125,6 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     limits.max_image_width = Some(width.max(height));
     limits.max_image_height = Some(width.max(height));
     reader.limits(limits);
-    let corrupt = |e: image::ImageError| DecodeError::Corrupt(e.to_string());
     let mut decoder = reader.into_decoder().map_err(corrupt)?;
     let upright = orientation(&mut decoder);
     let mut img = DynamicImage::from_decoder(decoder).map_err(corrupt)?;
@@ -125,10 +132,41 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     Ok(img.into_rgb8())
 }
 
-/// True when the JPEG stream ends with EOI (0xFFD9), allowing trailing padding.
-fn has_jpeg_end(bytes: &[u8]) -> bool {
-    let tail = &bytes[bytes.len().saturating_sub(64)..];
-    tail.windows(2).any(|w| w == [0xFF, 0xD9])
+/// A JPEG as stored (sensor orientation), RGB, sides at most `max_side`, decoded
+/// strictly: entropy data that does not decode (bytes overwritten), or that runs out
+/// before the last block (a file cut short), is an error rather than grey blocks.
+///
+/// The stream is decoded without its end-of-image marker: a marker would end a scan
+/// that is cut short silently, while running out of data is an error in strict mode.
+/// A file without the marker at its end (trailing padding aside) is truncated. Headers
+/// that only the lenient decoder accepts (bytes between segments, which some cameras
+/// write) are decoded leniently.
+fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
+    let tail = bytes.len().saturating_sub(64);
+    let end = bytes[tail..]
+        .windows(2)
+        .rposition(|w| w == [0xFF, 0xD9])
+        .map(|i| tail + i)
+        .ok_or_else(|| DecodeError::Corrupt("truncated JPEG (no end-of-image marker)".into()))?;
+    let stream = &bytes[..end];
+    let options = |strict: bool| {
+        DecoderOptions::default()
+            .set_strict_mode(strict)
+            .jpeg_set_out_colorspace(ColorSpace::RGB)
+            .set_max_width(max_side as usize)
+            .set_max_height(max_side as usize)
+    };
+    let corrupt = |e: zune_jpeg::errors::DecodeErrors| DecodeError::Corrupt(format!("{e:?}"));
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(true));
+    if decoder.decode_headers().is_err() {
+        decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(false));
+    }
+    let pixels = decoder.decode().map_err(corrupt)?;
+    let (w, h) = decoder
+        .dimensions()
+        .ok_or_else(|| DecodeError::Corrupt("no frame header".into()))?;
+    RgbImage::from_raw(w as u32, h as u32, pixels)
+        .ok_or_else(|| DecodeError::Corrupt("decoded size differs from the header".into()))
 }
 
 #[cfg(test)]
@@ -159,6 +197,37 @@ mod tests {
         let bytes = png_bytes(20, 10);
         assert!(matches!(
             decode_rgb(&bytes[..bytes.len() / 2], 1000),
+            Err(DecodeError::Corrupt(_))
+        ));
+    }
+
+    #[test]
+    fn corrupt_jpeg_data_is_refused() {
+        let photo = RgbImage::from_fn(160, 120, |x, y| {
+            image::Rgb([
+                (x * 3 % 256) as u8,
+                (y * 5 % 256) as u8,
+                ((x ^ y) % 256) as u8,
+            ])
+        });
+        let mut jpeg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 90)
+            .encode_image(&photo)
+            .unwrap();
+        assert_eq!(
+            decode_rgb(&jpeg, u64::MAX).unwrap().dimensions(),
+            (160, 120)
+        );
+        // Cut in half with an end-of-image marker appended.
+        let mut cut = jpeg[..jpeg.len() / 2].to_vec();
+        cut.extend([0xFF, 0xD9]);
+        assert!(matches!(
+            decode_rgb(&cut, u64::MAX),
+            Err(DecodeError::Corrupt(_))
+        ));
+        // Cut with no marker.
+        assert!(matches!(
+            decode_rgb(&jpeg[..jpeg.len() - 100], u64::MAX),
             Err(DecodeError::Corrupt(_))
         ));
     }

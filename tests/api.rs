@@ -579,6 +579,30 @@ async fn hostile_inputs_are_refused_exactly() {
         "undecodable_image",
     )
     .await;
+    // Corrupt JPEGs: cut in half with an end-of-image marker appended, and 400 bytes
+    // of its entropy data overwritten (decoders fill both in silently).
+    let jpeg = photo();
+    let mut cut = jpeg[..jpeg.len() / 2].to_vec();
+    cut.extend([0xFF, 0xD9]);
+    let mut overwritten = jpeg.clone();
+    let mut rng = ariadne_dlo::synth::Rng::new(3);
+    let start = jpeg.len() / 3;
+    for b in &mut overwritten[start..start + 400] {
+        *b = rng.next_u64() as u8;
+    }
+    for corrupt in [cut, overwritten] {
+        expect_error(
+            post(&q)
+                .header("content-type", "image/jpeg")
+                .body(corrupt)
+                .send()
+                .await
+                .unwrap(),
+            422,
+            "undecodable_image",
+        )
+        .await;
+    }
     // Request ids: a safe one is echoed, one with quotes or spaces is replaced.
     for (sent, kept) in [("cell-7/job:42", true), ("a\"b c", false)] {
         let response = c
