@@ -4,12 +4,15 @@
 //! where the superpixels' colour stands out from the rest of the border (mostly
 //! background). Each such run not explained by a cable already found becomes an extra
 //! seed on the border, and only walks that cross the image to another border point
-//! count from it.
+//! count from it. With a field, the two ends of every piece of cable inside the frame
+//! that no cable explains are seeds too ([`super::orphans`]): cables whose ends the
+//! network missed; a walk from one counts when it reaches another seed or the border.
 
 use super::cable::{Cable, Scene, model_cable};
 use super::field::CableField;
 use super::geometry::{dist3, median};
 use super::graph::Graph;
+use super::orphans::orphan_seeds;
 use super::pairing::{self, Pairing};
 use super::superpixels::Superpixels;
 use super::walk::{self, Seed, Walk, WalkEnd};
@@ -25,9 +28,12 @@ fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
     out
 }
 
-/// Cables crossing the whole frame, with no end in view: walks from border seeds where
-/// the border shows a colour the cables in `chosen` do not explain, kept when they reach
-/// another border point (see [`border`]). Their ends belong to no given end.
+/// Cables crossing the whole frame, with no end in view, and (with a field) cables
+/// whose ends were missed: walks from border seeds where the border shows a colour the
+/// cables in `chosen` do not explain, kept when they reach another border point (see
+/// [`border`]); then walks from the ends of the pieces of the field that still no
+/// cable explains, kept when they reach the border or another such seed. Their ends
+/// belong to no given end.
 pub(super) fn border_crossing_cables(
     scene: &Scene<'_>,
     chosen: &[Pairing],
@@ -41,6 +47,25 @@ pub(super) fn border_crossing_cables(
     } = *scene;
     let (graph, p) = (terrain.graph, terrain.params);
     let mut covered = vec![false; graph.len()];
+    cover(&mut covered, graph, walks, chosen);
+    let (evidence, min_score) = match field {
+        Some(f) => (Evidence::Field(f), p.field_border_min_score),
+        None => (Evidence::Colour(graph), p.border_min_score),
+    };
+    let seeds = border_seeds(evidence, sp, &covered, p);
+    let mut found = cables_from(scene, &seeds, &covered, min_score)?;
+    if let Some(vertex_field) = terrain.field {
+        cover(&mut covered, graph, &found.walks, &found.picked);
+        let frame = (sp.step, [sp.width, sp.height]);
+        let seeds = orphan_seeds(graph, vertex_field, &covered, frame, p);
+        let orphans = cables_from(scene, &seeds, &covered, min_score)?;
+        found.cables.extend(orphans.cables);
+    }
+    Ok(found.cables)
+}
+
+/// Marks the superpixels of the `chosen` walks, and their neighbours, as `covered`.
+fn cover(covered: &mut [bool], graph: &Graph, walks: &[Walk], chosen: &[Pairing]) {
     for choice in chosen {
         let joined = choice.joined.map(|j| &walks[j].vertices[..]).unwrap_or(&[]);
         for &v in walks[choice.walk].vertices.iter().chain(joined) {
@@ -50,16 +75,34 @@ pub(super) fn border_crossing_cables(
             }
         }
     }
-    let (evidence, min_score) = match field {
-        Some(f) => (Evidence::Field(f), p.field_border_min_score),
-        None => (Evidence::Colour(graph), p.border_min_score),
-    };
-    let seeds = border_seeds(evidence, sp, &covered, p);
+}
+
+/// What walks from extra seeds found.
+#[derive(Default)]
+struct SeedCables {
+    /// The cables.
+    cables: Vec<Cable>,
+    /// The walks kept.
+    walks: Vec<Walk>,
+    /// The pairings of `walks` the cables come from.
+    picked: Vec<Pairing>,
+}
+
+/// The cables walked from `seeds` that reach the border or another seed over mostly
+/// uncovered superpixels and score at least `min_score`.
+fn cables_from(
+    scene: &Scene<'_>,
+    seeds: &[Seed],
+    covered: &[bool],
+    min_score: f32,
+) -> Result<SeedCables, EngineError> {
+    let (terrain, sp) = (scene.terrain, scene.sp);
+    let p = terrain.params;
     if seeds.is_empty() {
-        return Ok(Vec::new());
+        return Ok(Default::default());
     }
     let min_length = p.border_min_steps * sp.step;
-    let crossing: Vec<Walk> = walk::walk_all(terrain, &seeds)?
+    let crossing: Vec<Walk> = walk::walk_all(terrain, seeds)?
         .into_iter()
         .filter(|w| {
             let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
@@ -69,21 +112,29 @@ pub(super) fn border_crossing_cables(
         })
         .collect();
     let confidence = vec![p.border_seed_confidence; seeds.len()];
-    let border_scene = Scene {
+    // Only such walks were kept, so every pairing ends on the border or a seed.
+    let picked: Vec<Pairing> = pairing::pair(&crossing, &confidence, p)
+        .into_iter()
+        .filter(|c| c.score >= min_score)
+        .collect();
+    let seed_scene = Scene {
         walks: &crossing,
-        seeds: &seeds,
+        seeds,
         ..*scene
     };
-    Ok(pairing::pair(&crossing, &confidence, p)
+    let cables = picked
         .iter()
-        // Only crossing walks were kept, so every pairing ends on the border or a seed.
-        .filter(|c| c.score >= min_score)
-        .filter_map(|c| model_cable(&border_scene, c))
+        .filter_map(|c| model_cable(&seed_scene, c))
         .map(|mut cable| {
             cable.end_indices = [None, None];
             cable
         })
-        .collect())
+        .collect();
+    Ok(SeedCables {
+        cables,
+        walks: crossing,
+        picked,
+    })
 }
 
 /// What tells a cable crossing the border from background.

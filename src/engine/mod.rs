@@ -21,6 +21,7 @@ mod error;
 pub mod field;
 pub mod geometry;
 pub mod graph;
+mod orphans;
 pub mod pairing;
 mod params;
 pub mod refine;
@@ -93,7 +94,8 @@ pub fn validate_ends(ends: &[[f64; 2]], width: u32, height: u32) -> Result<(), E
 
 /// Finds the cables of `image` that start or end at the given `ends` (pixel
 /// coordinates, unpaired; the engine pairs them), all trusted fully; with
-/// `border_cables`, also those crossing the frame with no end in view.
+/// `border_cables`, also those crossing the frame with no end in view and, with a
+/// field, those whose ends are not among `ends`.
 ///
 /// Errors: invalid parameters, an image smaller than [`MIN_SIDE`], an end outside the
 /// image or not finite.

@@ -111,7 +111,9 @@ pub struct Params {
     /// Refine the centreline on the image (sub-pixel) before the final fit.
     pub refine: bool,
     /// Also look for cables with no end in view, crossing the frame from border to
-    /// border (seeded where the border shows an unexplained colour).
+    /// border (seeded where the border shows an unexplained colour or field), and, with
+    /// a field, for cables whose ends were missed (seeded at the ends of unexplained
+    /// pieces of the field: `field_orphan_level`).
     pub border_cables: bool,
     /// Half-length of the profiles sampled across the curve during refinement, pixels.
     pub refine_radius_px: f32,
@@ -212,6 +214,12 @@ pub struct Params {
     /// `border_min_score` when the field is used (its share already weeds out walks
     /// over the background, and lowers the scores it keeps).
     pub field_border_min_score: f32,
+    /// Mean cable probability from which a superpixel no cable explains counts as part
+    /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
+    /// (README, "How the engine uses the field"). 1 or more: no such seeds.
+    pub field_orphan_level: f32,
+    /// Such a piece seeds walks when its two ends lie this many superpixel steps apart.
+    pub field_orphan_min_steps: f32,
 }
 
 /// Names of the built-in presets, in the order `--help` lists them.
@@ -289,6 +297,8 @@ impl Default for Params {
             field_level: 0.3,
             field_min_share: 0.15,
             field_border_min_score: 0.25,
+            field_orphan_level: 0.5,
+            field_orphan_min_steps: 6.0,
         }
     }
 }
@@ -359,37 +369,4 @@ impl Params {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn presets_are_valid_and_published() {
-        for name in PRESET_NAMES {
-            Params::preset(name).unwrap().validate().unwrap();
-        }
-        let c = Params::preset("clutter").unwrap();
-        assert_eq!((c.n_segments, c.compactness, c.sigma), (1500, 10.0, 1.0));
-        let d = Params::preset("default").unwrap();
-        assert_eq!((d.n_segments, d.compactness, d.sigma), (2000, 20.0, 1.0));
-        assert!(matches!(
-            Params::preset("nope"),
-            Err(EngineError::UnknownPreset(..))
-        ));
-    }
-
-    #[test]
-    fn overrides_replace_and_validate() {
-        let base = Params::default();
-        let o: Map<String, Value> = serde_json::from_str(r#"{"n_segments": 1200}"#).unwrap();
-        assert_eq!(base.with_overrides(&o).unwrap().n_segments, 1200);
-        for bad in [
-            r#"{"n_segments": 0}"#,
-            r#"{"sigma": -1}"#,
-            r#"{"bogus": 1}"#,
-            r#"{"kappa": "x"}"#,
-        ] {
-            let o: Map<String, Value> = serde_json::from_str(bad).unwrap();
-            assert!(base.with_overrides(&o).is_err(), "{bad} accepted");
-        }
-    }
-}
+mod tests;
