@@ -17,6 +17,10 @@ augmentation. Run from the repository root (see models/cable_field.md):
     python training/train_field.py --out models/cable_field.onnx              # all photos
     python training/train_field.py --holdout wood --out out/field-wood.onnx  # one fold
 
+The network (`--backbone lite0`, the default) is EfficientNet-Lite0's first stages with
+ImageNet weights and a small decoder (training/backbone.py); `--backbone none` is the
+from-scratch FieldNet below.
+
 With `--holdout GROUP` the photos of that background group (white, wood, blue, hard)
 are never trained on and are reported as the fold's validation: the leave-one-
 background-out forecast. `--no-copy-paste` and `--no-synthetic` switch ingredients off
@@ -216,13 +220,14 @@ def evaluate(model, photos):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--steps", type=int, default=3000)
+    ap.add_argument("--steps", type=int, default=1200)
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--lr", type=float, default=4e-3)
     ap.add_argument("--width", type=int, default=32, help="channels of the body")
-    ap.add_argument("--backbone", choices=["none", "lite0"], default="none",
-                    help="lite0: EfficientNet-Lite0's first stages, ImageNet weights "
-                         "(training/backbone.py)")
+    ap.add_argument("--backbone", choices=["none", "lite0"], default="lite0",
+                    help="lite0 (the bundled model): EfficientNet-Lite0's first stages, "
+                         "ImageNet weights (training/backbone.py); none: FieldNet from "
+                         "scratch")
     ap.add_argument("--real", type=float, default=0.25, help="share of unmodified photos")
     ap.add_argument("--composed", type=float, default=0.45,
                     help="share of photo cables on procedural backgrounds")
