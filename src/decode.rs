@@ -56,20 +56,38 @@ pub fn sniff(bytes: &[u8]) -> Result<ImageFormat, DecodeError> {
 /// that is only a header, a "pixel bomb") is measured from its IHDR chunk, so it is
 /// refused for its size rather than as truncated.
 pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), DecodeError> {
+    header(bytes).map(|h| h.size)
+}
+
+/// What the header says.
+struct Header {
+    format: ImageFormat,
+    /// Width and height as displayed.
+    size: (u32, u32),
+    /// How to turn the stored pixels upright.
+    orientation: Orientation,
+}
+
+fn header(bytes: &[u8]) -> Result<Header, DecodeError> {
     let format = sniff(bytes)?;
-    let header = ImageReader::with_format(Cursor::new(bytes), format)
+    let read = ImageReader::with_format(Cursor::new(bytes), format)
         .into_decoder()
         .map(|mut d| (d.dimensions(), orientation(&mut d)));
-    match header {
-        Ok(((w, h), o)) if turns_sideways(o) => Ok((h, w)),
-        Ok(((w, h), _)) => Ok((w, h)),
+    let (size, orientation) = match read {
+        Ok(((w, h), o)) if turns_sideways(o) => ((h, w), o),
+        Ok(((w, h), o)) => ((w, h), o),
         Err(_) if format == ImageFormat::Png && bytes.len() >= 24 && &bytes[12..16] == b"IHDR" => {
             let be =
                 |i: usize| u32::from_be_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
-            Ok((be(16), be(20)))
+            ((be(16), be(20)), Orientation::NoTransforms)
         }
-        Err(e) => Err(DecodeError::Corrupt(e.to_string())),
-    }
+        Err(e) => return Err(DecodeError::Corrupt(e.to_string())),
+    };
+    Ok(Header {
+        format,
+        size,
+        orientation,
+    })
 }
 
 /// The photo's EXIF orientation; none (or an unreadable one) means upright.
@@ -93,8 +111,11 @@ fn turns_sideways(o: Orientation) -> bool {
 /// before allocating them, and refusing corrupt or truncated JPEG data (see
 /// [`decode_jpeg`]), which decoders would otherwise fill in silently.
 pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError> {
-    let format = sniff(bytes)?;
-    let (width, height) = dimensions(bytes)?;
+    let Header {
+        format,
+        size: (width, height),
+        orientation: upright,
+    } = header(bytes)?;
     if width == 0 || height == 0 {
         return Err(DecodeError::Corrupt(format!(
             "the header announces {width}x{height} pixels"
@@ -111,10 +132,6 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     }
     let corrupt = |e: image::ImageError| DecodeError::Corrupt(e.to_string());
     if format == ImageFormat::Jpeg {
-        let mut header = ImageReader::with_format(Cursor::new(bytes), format)
-            .into_decoder()
-            .map_err(corrupt)?;
-        let upright = orientation(&mut header);
         let mut img = DynamicImage::ImageRgb8(decode_jpeg(bytes, width.max(height))?);
         img.apply_orientation(upright);
         return Ok(img.into_rgb8());
@@ -125,8 +142,7 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
     limits.max_image_width = Some(width.max(height));
     limits.max_image_height = Some(width.max(height));
     reader.limits(limits);
-    let mut decoder = reader.into_decoder().map_err(corrupt)?;
-    let upright = orientation(&mut decoder);
+    let decoder = reader.into_decoder().map_err(corrupt)?;
     let mut img = DynamicImage::from_decoder(decoder).map_err(corrupt)?;
     img.apply_orientation(upright);
     Ok(img.into_rgb8())
@@ -217,6 +233,18 @@ mod tests {
         assert_eq!(
             decode_rgb(&jpeg, u64::MAX).unwrap().dimensions(),
             (160, 120)
+        );
+        // A greyscale JPEG comes out RGB.
+        let grey = image::GrayImage::from_fn(40, 30, |x, _| image::Luma([(x * 6) as u8]));
+        let mut grey_jpeg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut grey_jpeg, 90)
+            .encode_image(&grey)
+            .unwrap();
+        let decoded = decode_rgb(&grey_jpeg, u64::MAX).unwrap();
+        let px = decoded.get_pixel(20, 10).0;
+        assert!(
+            px[0] == px[1] && px[1] == px[2] && px[0].abs_diff(120) <= 3,
+            "{px:?}"
         );
         // Cut in half with an end-of-image marker appended.
         let mut cut = jpeg[..jpeg.len() / 2].to_vec();
