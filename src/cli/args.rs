@@ -39,8 +39,8 @@ pub struct DetectorArgs {
     #[arg(long, env = "ARIADNE_MODEL", default_value_os_t = DetectorConfig::default().model)]
     pub model: PathBuf,
     /// Output convention of the model: field (the bundled cable-field model: ends and
-    /// cable field), heatmap (ends only) or yolo (ultralytics `[1, 4+classes, N]`; box
-    /// centres become ends).
+    /// cable field), heatmap (ends only) or yolo (an ultralytics export: `[1, 4+classes,
+    /// N]`, or `[1, 300, 6]` from nms=True / end-to-end exports; box centres become ends).
     #[arg(long, env = "ARIADNE_MODEL_KIND", default_value = "field")]
     pub model_kind: ModelKind,
     /// Network input width; the photo is resized to fit, keeping its aspect ratio.

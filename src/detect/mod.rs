@@ -79,7 +79,9 @@ pub enum ModelKind {
     Field,
     /// Keypoint heatmap `[1, 1 or 3, H/s, W/s]` (ends only).
     Heatmap,
-    /// Ultralytics YOLO detections `[1, 4 + classes, N]`; box centres become ends.
+    /// Ultralytics YOLO detections: the raw head `[1, 4 + classes, N]`, or `[1, N, 6]`
+    /// boxes of an nms=True or end-to-end export (told apart by the model's metadata);
+    /// box centres become ends.
     Yolo,
 }
 
