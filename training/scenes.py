@@ -115,8 +115,8 @@ def smooth_noise(nrng: np.random.Generator, h: int, w: int, scale: float) -> np.
     return np.asarray(small.resize((w, h), Image.BICUBIC), np.float32).clip(-1.5, 1.5)
 
 
-# Also draw the busy textures (`mosaic`, `drips`): an option of train_field.py
-# (`--rich-textures`), off for the bundled model.
+# Also draw the busy textures (`mosaic`, `drips`): train_field.py's `--rich-textures`,
+# on for the bundled model (`--no-rich-textures` leaves them out).
 RICH_TEXTURES = False
 
 

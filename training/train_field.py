@@ -233,8 +233,9 @@ def main():
                     help="share of photo cables on procedural backgrounds")
     ap.add_argument("--no-copy-paste", action="store_true")
     ap.add_argument("--no-synthetic", action="store_true")
-    ap.add_argument("--rich-textures", action="store_true",
-                    help="also mosaic and drip-painting backgrounds")
+    ap.add_argument("--rich-textures", action=argparse.BooleanOptionalAction, default=True,
+                    help="also mosaic and drip-painting backgrounds (the bundled recipe; "
+                         "--no-rich-textures leaves them out)")
     ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
