@@ -58,6 +58,16 @@ async fn spawn_app(configure: impl FnOnce(&mut ServeConfig)) -> TestApp {
 }
 
 /// The scene as a JPEG file.
+/// The scene photo with its true ends, posted as multipart to `path` (query included).
+async fn post_scene(app: &TestApp, path: &str) -> reqwest::Response {
+    app.client
+        .post(app.url(path))
+        .multipart(form(photo(), Some(ends_json())))
+        .send()
+        .await
+        .unwrap()
+}
+
 fn photo() -> Vec<u8> {
     let mut jpeg = Vec::new();
     scene()
@@ -696,13 +706,7 @@ async fn a_request_past_its_deadline_frees_its_worker() {
     let started = std::time::Instant::now();
     let response = slow_request(&app).send().await.unwrap();
     expect_error(response, 504, "deadline_exceeded").await;
-    let response = app
-        .client
-        .post(app.url("/segment"))
-        .multipart(form(photo(), Some(ends_json())))
-        .send()
-        .await
-        .unwrap();
+    let response = post_scene(&app, "/segment").await;
     assert_eq!(response.status(), 200, "the worker was still busy");
     assert!(started.elapsed() < std::time::Duration::from_millis(1500));
 }
@@ -716,13 +720,7 @@ async fn metrics_change_after_requests() {
         "preset=\"clutter\"",
     ];
     let before = app.get_text("/metrics").await;
-    let r = app
-        .client
-        .post(app.url("/segment?preset=clutter"))
-        .multipart(form(photo(), Some(ends_json())))
-        .send()
-        .await
-        .unwrap();
+    let r = post_scene(&app, "/segment?preset=clutter").await;
     assert_eq!(r.status(), 200);
     let after = app.get_text("/metrics").await;
     let delta = metric_value(&after, "ariadne_requests_total", &labels)
@@ -884,13 +882,7 @@ async fn slow_and_idle_clients_are_cut_and_connections_are_capped() {
     let hogs: Vec<_> = (0..3).map(|_| raw_connection(&app)).collect();
     tokio::time::sleep(Duration::from_millis(100)).await;
     let started = std::time::Instant::now();
-    let response = app
-        .client
-        .post(app.url("/segment"))
-        .multipart(form(photo(), Some(ends_json())))
-        .send()
-        .await
-        .unwrap();
+    let response = post_scene(&app, "/segment").await;
     assert_eq!(response.status(), 200);
     let waited = started.elapsed();
     assert!(
@@ -933,13 +925,7 @@ async fn uploads_are_admitted_within_the_memory_budget() {
     assert!(answer.starts_with("HTTP/1.1 429"), "{answer}");
     assert!(answer.contains("upload_budget_full"), "{answer}");
     // A small one fits beside the first.
-    let response = app
-        .client
-        .post(app.url("/segment"))
-        .multipart(form(photo(), Some(ends_json())))
-        .send()
-        .await
-        .unwrap();
+    let response = post_scene(&app, "/segment").await;
     assert_eq!(response.status(), 200);
     // Once the first ends, its share is back: a 500 KB declaration is admitted (and
     // its garbage body then refused for what it is).

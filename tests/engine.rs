@@ -204,38 +204,40 @@ fn field_from_mask(mask: &image::GrayImage) -> engine::CableField {
 /// terminals (and the border, for the cable with no end in view), with nothing extra.
 #[test]
 fn an_exact_field_recovers_the_hard_cases() {
-    let params = Params::default();
     for case in ariadne_dlo::synth::Case::ALL {
         let s = ariadne_dlo::synth::case(case);
-        let field = field_from_mask(&s.mask);
-        let ends = s.terminals();
-        let confidences = vec![1.0; ends.len()];
-        let seg = engine::segment_with_confidence(
-            &s.image,
-            &ends,
-            &confidences,
-            Some(&field),
-            &params,
-            engine::Deadline::NONE,
-        )
-        .unwrap();
-        let err: Vec<f32> = s
-            .cables
-            .iter()
-            .map(|c| {
-                seg.cables
-                    .iter()
-                    .map(|f| centreline_error(&c.centreline, &f.polyline))
-                    .fold(f32::MAX, f32::min)
-            })
-            .collect();
-        eprintln!(
-            "{case:?}: {} cables, centreline errors {err:?}",
-            seg.cables.len()
-        );
-        assert_eq!(seg.cables.len(), s.cables.len(), "{case:?}");
+        let (found, err) = with_exact_field(&s, &s.terminals());
+        assert_eq!(found, s.cables.len(), "{case:?}");
         assert!(err.iter().all(|&e| e < 3.0), "{case:?}: {err:?}");
     }
+}
+
+/// Segments the synthetic scene `s` from `ends` (trusted fully) and its exact field:
+/// the number of cables found, and each true cable's centreline error to the nearest.
+fn with_exact_field(s: &ariadne_dlo::synth::Scene, ends: &[[f64; 2]]) -> (usize, Vec<f32>) {
+    let field = field_from_mask(&s.mask);
+    let confidences = vec![1.0; ends.len()];
+    let seg = engine::segment_with_confidence(
+        &s.image,
+        ends,
+        &confidences,
+        Some(&field),
+        &Params::default(),
+        engine::Deadline::NONE,
+    )
+    .unwrap();
+    let err: Vec<f32> = s
+        .cables
+        .iter()
+        .map(|c| {
+            seg.cables
+                .iter()
+                .map(|f| centreline_error(&c.centreline, &f.polyline))
+                .fold(f32::MAX, f32::min)
+        })
+        .collect();
+    eprintln!("{} cables, centreline errors {err:?}", seg.cables.len());
+    (seg.cables.len(), err)
 }
 
 /// Cables whose ends the network missed are found from the field alone: with an exact
@@ -246,38 +248,14 @@ fn an_exact_field_recovers_the_hard_cases() {
 /// found whole: above).
 #[test]
 fn cables_whose_ends_were_missed_are_found_from_the_field() {
-    let params = Params::default();
     for case in ariadne_dlo::synth::Case::ALL {
         let s = ariadne_dlo::synth::case(case);
-        let field = field_from_mask(&s.mask);
-        let seg = engine::segment_with_confidence(
-            &s.image,
-            &[],
-            &[],
-            Some(&field),
-            &params,
-            engine::Deadline::NONE,
-        )
-        .unwrap();
-        let err: Vec<f32> = s
-            .cables
-            .iter()
-            .map(|c| {
-                seg.cables
-                    .iter()
-                    .map(|f| centreline_error(&c.centreline, &f.polyline))
-                    .fold(f32::MAX, f32::min)
-            })
-            .collect();
-        eprintln!(
-            "{case:?}: {} cables, centreline errors {err:?}",
-            seg.cables.len()
-        );
+        let (found, err) = with_exact_field(&s, &[]);
         let (parts, whole) = match case {
             ariadne_dlo::synth::Case::NoEndInView => (3, &err[..1]),
             _ => (s.cables.len(), &err[..]),
         };
-        assert_eq!(seg.cables.len(), parts, "{case:?}");
+        assert_eq!(found, parts, "{case:?}");
         assert!(whole.iter().all(|&e| e < 3.0), "{case:?}: {err:?}");
     }
 }
