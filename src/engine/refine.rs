@@ -2,13 +2,16 @@
 //! and colour.
 //!
 //! Across the curve, every few pixels, a colour profile is sampled (bilinear, half-pixel
-//! steps). Each sample is called "cable" when it is closer in Lab to the cable's colour
-//! (the median along the curve) than to the background at either end of the profile.
-//! The run of cable samples nearest the curve gives both edges with sub-pixel
-//! interpolation: their midpoint is the centre, their distance the width. Profiles that
-//! cannot be read (a crossing, the frame, a cable of the background's colour) are
-//! skipped; offsets are median- then mean-filtered along the curve so one bad profile
-//! cannot bend it.
+//! steps). Each sample's contrast is its Lab distance to the nearer end of the profile
+//! (the background on either side); the cable is the run nearest the curve where the
+//! contrast exceeds half its peak, and its two edges, interpolated to sub-pixel, give
+//! the centre (their midpoint) and the width (their distance). A run that is a cast
+//! shadow (darker than the background by lightness alone) beside a run lighter than the
+//! background gives way to the lighter one: a pale cable's shadow on a pale table has
+//! more contrast than the cable and would otherwise pull the centreline onto itself.
+//! Profiles that cannot be read (a crossing, the frame, a cable of the background's
+//! colour) are skipped; offsets are median- then mean-filtered along the curve so one
+//! bad profile cannot bend it.
 
 use super::Params;
 use super::color::LabImage;
@@ -175,17 +178,9 @@ fn read_profile(
     let start = (0..=search)
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;
-    let mut lo = start;
-    while lo > 0 && m[lo - 1] > 0.0 {
-        lo -= 1;
-    }
-    let mut hi = start;
-    while hi + 1 < m.len() && m[hi + 1] > 0.0 {
-        hi += 1;
-    }
-    if lo == 0 || hi == m.len() - 1 {
-        return None;
-    }
+    let (lo, hi) = run_around(&m, start)?;
+    let (m, lo, hi) = lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
+        .unwrap_or((m, lo, hi));
     // Zero crossings between the last cable sample and the first background one.
     let left = lo as f32 - m[lo] / (m[lo] - m[lo - 1]);
     let right = hi as f32 + m[hi] / (m[hi] - m[hi + 1]);
@@ -197,6 +192,73 @@ fn read_profile(
         ((left + right) * 0.5 - centre as f32) * settings.step,
         width,
     ))
+}
+
+/// The run of positive `m` around `start`; `None` when it reaches an end of the profile
+/// (the cable is not crossed whole).
+fn run_around(m: &[f32], start: usize) -> Option<(usize, usize)> {
+    let mut lo = start;
+    while lo > 0 && m[lo - 1] > 0.0 {
+        lo -= 1;
+    }
+    let mut hi = start;
+    while hi + 1 < m.len() && m[hi + 1] > 0.0 {
+        hi += 1;
+    }
+    (lo > 0 && hi < m.len() - 1).then_some((lo, hi))
+}
+
+/// A cast shadow differs from the background it falls on by lightness far more than by
+/// colour: its mean a*b* difference is at most this share of its mean lightness drop.
+const SHADOW_CHROMA: f32 = 0.5;
+
+/// When the run `lo..=hi` of the profile is a cast shadow (darker than the background,
+/// hardly another colour) and a run lighter than the background lies beside it, that
+/// lighter run: a pale cable on a pale table casts a shadow of more contrast than its
+/// own, which a reading by contrast alone takes for the cable. Returns the lighter
+/// run's half-maximum margins (as `m` in [`read_profile`]) and its bounds.
+fn lit_beside_shadow(
+    profile: &[[f32; 3]],
+    bg: [[f32; 3]; 2],
+    fg: &[f32],
+    [lo, hi]: [usize; 2],
+    min_de: f32,
+) -> Option<(Vec<f32>, usize, usize)> {
+    // A sample against the nearer background: lightness and a*b* differences.
+    let delta = |s: [f32; 3]| {
+        let b = if dist3(s, bg[0]) <= dist3(s, bg[1]) {
+            bg[0]
+        } else {
+            bg[1]
+        };
+        (s[0] - b[0], (s[1] - b[1]).hypot(s[2] - b[2]))
+    };
+    let n = (hi - lo + 1) as f32;
+    let (dl, dab) = profile[lo..=hi]
+        .iter()
+        .map(|&s| delta(s))
+        .fold((0.0, 0.0), |(l, c), (dl, dc)| (l + dl / n, c + dc / n));
+    if dl >= 0.0 || dab > SHADOW_CHROMA * -dl {
+        return None;
+    }
+    // Contrast of the samples lighter than the background, sought within the shadow's
+    // width on either side of it.
+    let lit: Vec<f32> = profile
+        .iter()
+        .zip(fg)
+        .map(|(&s, &f)| if delta(s).0 > 0.0 { f } else { 0.0 })
+        .collect();
+    let reach = hi - lo + 1;
+    let top = (lo.saturating_sub(reach)..lo)
+        .chain(hi + 1..(hi + 1 + reach).min(lit.len()))
+        .max_by(|&a, &b| lit[a].total_cmp(&lit[b]))?;
+    if lit[top] < min_de {
+        return None;
+    }
+    let half = 0.5 * lit[top];
+    let m: Vec<f32> = lit.iter().map(|f| f - half).collect();
+    let (lo, hi) = run_around(&m, top)?;
+    Some((m, lo, hi))
 }
 
 /// Offsets at every point: read ones median-filtered (5) and mean-filtered (5), the
@@ -262,6 +324,50 @@ mod tests {
         }
         let w = r.width_px.unwrap();
         assert!((w - 8.0).abs() < 1.0, "width {w}");
+    }
+
+    /// A pale table (rows 0..40) with horizontal bands: `(first row, last row, colour)`.
+    fn table(bands: &[(usize, usize, [u8; 3])]) -> LabImage {
+        let (w, h) = (60, 40);
+        let mut rgb = [190u8, 214, 208].repeat(w * h);
+        for &(top, bottom, colour) in bands {
+            for y in top..=bottom {
+                for x in 0..w {
+                    rgb[(y * w + x) * 3..(y * w + x) * 3 + 3].copy_from_slice(&colour);
+                }
+            }
+        }
+        LabImage::from_rgb(&rgb, w, h)
+    }
+
+    /// The rows `refine` moves a line started at row `y` to (min, max over its points).
+    fn refined_rows(lab: &LabImage, y: f32) -> (f32, f32) {
+        let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, y]).collect();
+        let params = Params {
+            refine_radius_px: 10.0,
+            ..Params::default()
+        };
+        let r = refine(&line, lab, &params);
+        r.points
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p[1]), hi.max(p[1])))
+    }
+
+    #[test]
+    fn a_pale_cable_is_told_from_its_darker_shadow() {
+        // A white cable (rows 17-20, centre 18.5) and its grey shadow below it (rows
+        // 22-28), wider and of more contrast than the cable: a line started on the
+        // shadow moves onto the cable.
+        let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [120, 130, 122])]);
+        let (lo, hi) = refined_rows(&lab, 23.0);
+        assert!(lo > 18.0 && hi < 19.0, "rows {lo}..{hi}");
+        // A grey cable alone stays a grey cable, and a blue one stays itself beside a
+        // white one: a shadow has the table's colour, and the blue one does not.
+        let (lo, hi) = refined_rows(&table(&[(22, 28, [120, 130, 122])]), 24.0);
+        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+        let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [40, 60, 160])]);
+        let (lo, hi) = refined_rows(&lab, 24.0);
+        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
     }
 
     #[test]
