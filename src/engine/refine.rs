@@ -9,6 +9,8 @@
 //! shadow (darker than the background by lightness alone) beside a run lighter than the
 //! background gives way to the lighter one: a pale cable's shadow on a pale table has
 //! more contrast than the cable and would otherwise pull the centreline onto itself.
+//! It does so only when the shadows read along the cable fall the same way in the image,
+//! as one light casts them.
 //! Profiles that cannot be read (a crossing, the frame, a cable of the background's
 //! colour) are skipped; offsets are median- then mean-filtered along the curve so one
 //! bad profile cannot bend it.
@@ -101,8 +103,7 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     let normal = normals(line);
     let steps = (radius / settings.step).round() as i32;
     let mut profile = Vec::with_capacity(2 * steps as usize + 1);
-    let mut offsets: Vec<(usize, f32)> = Vec::new();
-    let mut widths = Vec::new();
+    let mut readings: Vec<(usize, Reading)> = Vec::new();
     for i in (0..line.len()).step_by(params.refine_profile_stride.max(1) as usize) {
         let (p, nrm) = (line[i], normal[i]);
         profile.clear();
@@ -116,10 +117,17 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         if profile.len() != 2 * steps as usize + 1 {
             continue;
         }
-        if let Some((centre, width)) = read_profile(&profile, cable, steps as usize, settings) {
-            offsets.push((i, centre));
-            widths.push(width);
+        if let Some(reading) = read_profile(&profile, cable, steps as usize, settings) {
+            readings.push((i, reading));
         }
+    }
+    let trust_lit = shadows_agree(&readings, &normal);
+    let mut offsets: Vec<(usize, f32)> = Vec::with_capacity(readings.len());
+    let mut widths = Vec::with_capacity(readings.len());
+    for (i, reading) in readings {
+        let (centre, width) = reading.lit.filter(|_| trust_lit).unwrap_or(reading.plain);
+        offsets.push((i, centre));
+        widths.push(width);
     }
     let width_px = if widths.len() >= 3 {
         median(&mut widths, f32::total_cmp)
@@ -142,8 +150,19 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     Refined { points, width_px }
 }
 
-/// Finds the cable across one profile; returns its centre offset and width in pixels,
-/// or `None` when the profile cannot be read.
+/// One profile read: the cable's centre offset and width, pixels.
+type Across = (f32, f32);
+
+/// What one profile shows.
+#[derive(Debug, Clone, Copy)]
+struct Reading {
+    /// The run of most contrast around the centre.
+    plain: Across,
+    /// When that run is a cast shadow, the lighter run beside it ([`lit_beside_shadow`]).
+    lit: Option<Across>,
+}
+
+/// Finds the cable across one profile, or `None` when the profile cannot be read.
 ///
 /// Each sample's "foreground" is its Lab distance to the nearer of the two profile ends
 /// (the local background on either side). The cable is the run around the centre where
@@ -155,7 +174,7 @@ fn read_profile(
     cable: [f32; 3],
     centre: usize,
     settings: Profiles,
-) -> Option<(f32, f32)> {
+) -> Option<Reading> {
     let (left_bg, right_bg) = (profile[0], profile[profile.len() - 1]);
     let min_de = settings.min_background_de;
     if dist3(left_bg, cable) < min_de || dist3(right_bg, cable) < min_de {
@@ -179,16 +198,21 @@ fn read_profile(
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;
     let (lo, hi) = run_around(&m, start)?;
-    let (m, lo, hi) = lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
-        .unwrap_or((m, lo, hi));
-    // Zero crossings between the last cable sample and the first background one.
+    let edges = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
+    Some(Reading {
+        plain: edges((m, lo, hi))?,
+        lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de).and_then(edges),
+    })
+}
+
+/// The centre offset and width of the run `lo..=hi` of positive margins `m`, from the
+/// zero crossings between its last samples and the first background ones; `None` when
+/// narrower than the least width.
+fn edges(m: &[f32], lo: usize, hi: usize, centre: usize, settings: Profiles) -> Option<Across> {
     let left = lo as f32 - m[lo] / (m[lo] - m[lo - 1]);
     let right = hi as f32 + m[hi] / (m[hi] - m[hi + 1]);
     let width = (right - left) * settings.step;
-    if width < settings.min_width {
-        return None;
-    }
-    Some((
+    (width >= settings.min_width).then_some((
         ((left + right) * 0.5 - centre as f32) * settings.step,
         width,
     ))
@@ -267,6 +291,27 @@ fn lit_beside_shadow(
     Some((m, lo, hi))
 }
 
+/// How well the shadows read along one cable must agree in direction (the length of
+/// their mean unit direction in the image) for the lit runs beside them to be trusted:
+/// one light casts every shadow of a cable to the same side, wood grain or a cable
+/// alongside falls to either side.
+const SHADOW_AGREEMENT: f32 = 0.8;
+
+/// Whether the shadows found across `line` (the profiles with a lit run) fall the same
+/// way in the image (see [`SHADOW_AGREEMENT`]).
+fn shadows_agree(readings: &[(usize, Reading)], normal: &[[f32; 2]]) -> bool {
+    let (mut sum, mut n) = ([0.0f32; 2], 0.0f32);
+    for (i, r) in readings {
+        if let Some(lit) = r.lit {
+            // From the cable (the lit run) to its shadow (the plain run).
+            let side = (r.plain.0 - lit.0).signum();
+            sum = [sum[0] + side * normal[*i][0], sum[1] + side * normal[*i][1]];
+            n += 1.0;
+        }
+    }
+    n > 0.0 && sum[0].hypot(sum[1]) >= SHADOW_AGREEMENT * n
+}
+
 /// Offsets at every point: read ones median-filtered (5) and mean-filtered (5), the
 /// gaps filled by linear interpolation, all clamped to ±`limit`.
 fn smooth_offsets(read: &[(usize, f32)], n: usize, limit: f32) -> Vec<f32> {
@@ -334,15 +379,15 @@ mod tests {
 
     /// A pale table (rows 0..40) with horizontal bands: `(first row, last row, colour)`.
     fn table(bands: &[(usize, usize, [u8; 3])]) -> LabImage {
+        table_with(|_, y| bands.iter().find(|b| (b.0..=b.1).contains(&y)).map(|b| b.2))
+    }
+
+    /// A 60x40 pale table with `paint(x, y)`'s colour where it gives one.
+    fn table_with(paint: impl Fn(usize, usize) -> Option<[u8; 3]>) -> LabImage {
         let (w, h) = (60, 40);
-        let mut rgb = [190u8, 214, 208].repeat(w * h);
-        for &(top, bottom, colour) in bands {
-            for y in top..=bottom {
-                for x in 0..w {
-                    rgb[(y * w + x) * 3..(y * w + x) * 3 + 3].copy_from_slice(&colour);
-                }
-            }
-        }
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| paint(i % w, i / w).unwrap_or([190, 214, 208]))
+            .collect();
         LabImage::from_rgb(&rgb, w, h)
     }
 
@@ -372,6 +417,20 @@ mod tests {
         let (lo, hi) = refined_rows(&table(&[(22, 28, [120, 130, 122])]), 24.0);
         assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
         let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [40, 60, 160])]);
+        let (lo, hi) = refined_rows(&lab, 24.0);
+        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+    }
+
+    #[test]
+    fn light_stripes_on_either_side_of_a_grey_cable_are_not_taken_for_it() {
+        // A grey cable (rows 22-28) with a white stripe above it on the left half and
+        // below it on the right: no one light casts that shadow, so it stays the cable.
+        let lab = table_with(|x, y| match y {
+            22..=28 => Some([120, 130, 122]),
+            17..=20 if x < 30 => Some([240, 248, 240]),
+            30..=33 if x >= 30 => Some([240, 248, 240]),
+            _ => None,
+        });
         let (lo, hi) = refined_rows(&lab, 24.0);
         assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
     }
