@@ -5,12 +5,13 @@
 //! steps). Each sample's contrast is its Lab distance to the nearer end of the profile
 //! (the background on either side); the cable is the run nearest the curve where the
 //! contrast exceeds half its peak, and its two edges, interpolated to sub-pixel, give
-//! the centre (their midpoint) and the width (their distance). A run that is a cast
-//! shadow (darker than the background by lightness alone) beside a run lighter than the
-//! background gives way to the lighter one: a pale cable's shadow on a pale table has
-//! more contrast than the cable and would otherwise pull the centreline onto itself.
-//! It does so only when the shadows read along the cable fall the same way in the image,
-//! as one light casts them.
+//! the centre (their midpoint) and the width (their distance). Cast shadows (darker
+//! than the background by lightness alone) are told from the cable: a pale cable's
+//! shadow on a pale table has more contrast than the cable and would otherwise pull the
+//! centreline onto itself. The run's shadowed flanks, nearer the background's colour
+//! than the cable's, are cut off; a run that is all shadow gives way to the lighter run
+//! beside it, when the shadows read along the cable fall one way in the image, as one
+//! light casts them.
 //! Profiles that cannot be read (a crossing, the frame, a cable of the background's
 //! colour) are skipped; offsets are median- then mean-filtered along the curve so one
 //! bad profile cannot bend it.
@@ -200,7 +201,12 @@ fn read_profile(
     let (lo, hi) = run_around(&m, start)?;
     let edges = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
     Some(Reading {
-        plain: edges((m, lo, hi))?,
+        plain: edges(without_shadowed_flanks(
+            profile,
+            [left_bg, right_bg],
+            cable,
+            (m, lo, hi),
+        ))?,
         lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de).and_then(edges),
     })
 }
@@ -216,6 +222,55 @@ fn edges(m: &[f32], lo: usize, hi: usize, centre: usize, settings: Profiles) -> 
         ((left + right) * 0.5 - centre as f32) * settings.step,
         width,
     ))
+}
+
+/// A profile sample against the nearer of the two backgrounds: its lightness and its
+/// a*b* differences.
+fn against_background(s: [f32; 3], bg: [[f32; 3]; 2]) -> (f32, f32) {
+    let b = if dist3(s, bg[0]) <= dist3(s, bg[1]) {
+        bg[0]
+    } else {
+        bg[1]
+    };
+    (s[0] - b[0], (s[1] - b[1]).hypot(s[2] - b[2]))
+}
+
+/// Whether a sample looks like a cast shadow: darker than the background by lightness
+/// far more than by colour ([`SHADOW_CHROMA`]).
+fn shadow_like(s: [f32; 3], bg: [[f32; 3]; 2]) -> bool {
+    let (dl, dab) = against_background(s, bg);
+    dl < 0.0 && dab <= SHADOW_CHROMA * -dl
+}
+
+/// The run `lo..=hi` (margins `m`) without the shadowed flanks it took in: samples at
+/// its ends that are darker than the background by lightness alone and nearer the
+/// background's colour than the cable's. A pale cable's shadow on either side has enough
+/// contrast to join the run; the darker, self-shaded side of a coloured cable keeps the
+/// cable's colour and stays. The cut samples' margins are made negative.
+fn without_shadowed_flanks(
+    profile: &[[f32; 3]],
+    bg: [[f32; 3]; 2],
+    cable: [f32; 3],
+    (mut m, lo, hi): (Vec<f32>, usize, usize),
+) -> (Vec<f32>, usize, usize) {
+    let flank = |j: usize| {
+        let s = profile[j];
+        shadow_like(s, bg) && dist3(s, bg[0]).min(dist3(s, bg[1])) < dist3(s, cable)
+    };
+    let (mut a, mut b) = (lo, hi);
+    while a < b && flank(a) {
+        a += 1;
+    }
+    while b > a && flank(b) {
+        b -= 1;
+    }
+    if a == b && flank(a) {
+        return (m, lo, hi);
+    }
+    for j in (lo..a).chain(b + 1..=hi) {
+        m[j] = -m[j];
+    }
+    (m, a, b)
 }
 
 /// The run of positive `m` around `start`; `None` when it reaches an end of the profile
@@ -254,15 +309,7 @@ fn lit_beside_shadow(
     [lo, hi]: [usize; 2],
     min_de: f32,
 ) -> Option<(Vec<f32>, usize, usize)> {
-    // A sample against the nearer background: lightness and a*b* differences.
-    let delta = |s: [f32; 3]| {
-        let b = if dist3(s, bg[0]) <= dist3(s, bg[1]) {
-            bg[0]
-        } else {
-            bg[1]
-        };
-        (s[0] - b[0], (s[1] - b[1]).hypot(s[2] - b[2]))
-    };
+    let delta = |s: [f32; 3]| against_background(s, bg);
     let n = (hi - lo + 1) as f32;
     let (dl, dab) = profile[lo..=hi]
         .iter()
@@ -419,6 +466,19 @@ mod tests {
         let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [40, 60, 160])]);
         let (lo, hi) = refined_rows(&lab, 24.0);
         assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+    }
+
+    #[test]
+    fn a_shadow_read_with_a_pale_cable_is_cut_off_and_a_cables_own_shade_is_not() {
+        // A pale yellow cable (rows 18-23, centre 20.5) and its grey shadow below it
+        // (rows 24-29), read as one run: the shadow is cut off.
+        let lab = table(&[(18, 23, [245, 225, 150]), (24, 29, [125, 136, 130])]);
+        let (lo, hi) = refined_rows(&lab, 22.0);
+        assert!(lo > 20.0 && hi < 21.0, "rows {lo}..{hi}");
+        // A red cable (rows 16-25, centre 20.5) whose lower half is in its own shade.
+        let lab = table(&[(16, 20, [200, 40, 40]), (21, 25, [110, 20, 20])]);
+        let (lo, hi) = refined_rows(&lab, 21.0);
+        assert!(lo > 20.0 && hi < 21.0, "rows {lo}..{hi}");
     }
 
     #[test]
