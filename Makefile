@@ -31,18 +31,18 @@ eval-detect: setup
 	cargo run --release -- eval --endpoints detect
 
 # Leave-one-background-out: train one network per held-out group (out/field-GROUP.onnx,
-# about 13 minutes each on 2 cores), then score each on its held-out photos.
+# about 15-20 minutes each on 2 cores), then score each on its held-out photos.
 lobo: setup
 	for g in white wood blue hard; do \
-	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 1200 --holdout $$g --out out/field-$$g.onnx; \
+	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 2000 --holdout $$g --out out/field-$$g.onnx; \
 	done
 	cargo build --release
 	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints detect
 	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints gt
 
-# The bundled model (about 15 minutes on 2 cores); see models/README.md.
+# The bundled model (about 15-20 minutes on 2 cores); see models/README.md.
 train-field:
-	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 1200 --out models/cable_field.onnx
+	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 2000 --out models/cable_field.onnx
 
 # hadolint, kubernetes-validate --strict, kubectl kustomize (offline checks).
 deploy-check:
