@@ -199,15 +199,16 @@ fn read_profile(
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;
     let (lo, hi) = run_around(&m, start)?;
-    let edges = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
+    let across = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
     Some(Reading {
-        plain: edges(without_shadowed_flanks(
+        plain: across(without_shadowed_flanks(
             profile,
             [left_bg, right_bg],
             cable,
             (m, lo, hi),
         ))?,
-        lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de).and_then(edges),
+        lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
+            .and_then(across),
     })
 }
 
@@ -288,7 +289,8 @@ fn run_around(m: &[f32], start: usize) -> Option<(usize, usize)> {
 }
 
 /// A cast shadow differs from the background it falls on by lightness far more than by
-/// colour: its mean a*b* difference is at most this share of its mean lightness drop.
+/// colour: its a*b* difference (a sample's, or a run's mean) is at most this share of
+/// its lightness drop.
 const SHADOW_CHROMA: f32 = 0.5;
 
 /// The least contrast of a lit run, as a share of `refine_min_background_de`: a pale
