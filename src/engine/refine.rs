@@ -440,17 +440,20 @@ mod tests {
         LabImage::from_rgb(&rgb, w, h)
     }
 
-    /// The rows `refine` moves a line started at row `y` to (min, max over its points).
-    fn refined_rows(lab: &LabImage, y: f32) -> (f32, f32) {
+    /// Asserts that `refine` moves a line started at row `y` wholly into the rows
+    /// strictly between `above` and `below`.
+    #[track_caller]
+    fn assert_refined_between(lab: &LabImage, y: f32, above: f32, below: f32) {
         let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, y]).collect();
         let params = Params {
             refine_radius_px: 10.0,
             ..Params::default()
         };
         let r = refine(&line, lab, &params);
-        r.points.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| {
+        let (lo, hi) = r.points.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| {
             (lo.min(p[1]), hi.max(p[1]))
-        })
+        });
+        assert!(lo > above && hi < below, "rows {lo}..{hi}");
     }
 
     #[test]
@@ -459,15 +462,12 @@ mod tests {
         // 22-28), wider and of more contrast than the cable: a line started on the
         // shadow moves onto the cable.
         let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [120, 130, 122])]);
-        let (lo, hi) = refined_rows(&lab, 23.0);
-        assert!(lo > 18.0 && hi < 19.0, "rows {lo}..{hi}");
+        assert_refined_between(&lab, 23.0, 18.0, 19.0);
         // A grey cable alone stays a grey cable, and a blue one stays itself beside a
         // white one: a shadow has the table's colour, and the blue one does not.
-        let (lo, hi) = refined_rows(&table(&[(22, 28, [120, 130, 122])]), 24.0);
-        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+        assert_refined_between(&table(&[(22, 28, [120, 130, 122])]), 24.0, 24.5, 25.5);
         let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [40, 60, 160])]);
-        let (lo, hi) = refined_rows(&lab, 24.0);
-        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+        assert_refined_between(&lab, 24.0, 24.5, 25.5);
     }
 
     #[test]
@@ -475,12 +475,10 @@ mod tests {
         // A pale yellow cable (rows 18-23, centre 20.5) and its grey shadow below it
         // (rows 24-29), read as one run: the shadow is cut off.
         let lab = table(&[(18, 23, [245, 225, 150]), (24, 29, [125, 136, 130])]);
-        let (lo, hi) = refined_rows(&lab, 22.0);
-        assert!(lo > 20.0 && hi < 21.0, "rows {lo}..{hi}");
+        assert_refined_between(&lab, 22.0, 20.0, 21.0);
         // A red cable (rows 16-25, centre 20.5) whose lower half is in its own shade.
         let lab = table(&[(16, 20, [200, 40, 40]), (21, 25, [110, 20, 20])]);
-        let (lo, hi) = refined_rows(&lab, 21.0);
-        assert!(lo > 20.0 && hi < 21.0, "rows {lo}..{hi}");
+        assert_refined_between(&lab, 21.0, 20.0, 21.0);
     }
 
     #[test]
@@ -493,8 +491,7 @@ mod tests {
             30..=33 if x >= 30 => Some([240, 248, 240]),
             _ => None,
         });
-        let (lo, hi) = refined_rows(&lab, 24.0);
-        assert!(lo > 24.5 && hi < 25.5, "rows {lo}..{hi}");
+        assert_refined_between(&lab, 24.0, 24.5, 25.5);
     }
 
     #[test]
