@@ -217,7 +217,9 @@ mod tests {
         let p = Params::default();
         let mut short = walk(0, WalkEnd::Border, 1.0);
         short.length_px = 5.0;
-        let weak = walk(1, WalkEnd::Lost, 0.01);
+        // Visual likelihood v scores v^0.5 · lost_factor: half the minimum score.
+        let v = (0.5 * p.min_cable_score / p.lost_factor).powi(2);
+        let weak = walk(1, WalkEnd::Lost, v);
         assert!(pair(&[short, weak], &[1.0; 2], &p).is_empty());
     }
 
@@ -230,9 +232,10 @@ mod tests {
             walk(2, WalkEnd::Seed(3), 0.8),
             walk(3, WalkEnd::Seed(2), 0.8),
         ];
-        // A weak detection leaving through the frame is dropped; a confirmed pair of
-        // weak detections is kept at full score.
-        let got = pair(&walks, &[1.0, 0.05, 0.4, 0.4], &p);
+        // A weak detection leaving through the frame (scoring half the minimum) is
+        // dropped; a confirmed pair of weak detections is kept at full score.
+        let weak = 0.5 * p.min_cable_score / (p.border_factor * walks[1].quality(&p));
+        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p);
         assert_eq!(got.len(), 2);
         assert_eq!((got[0].start, got[0].score), (2, walks[2].quality(&p)));
         assert_eq!(got[1].start, 0);

@@ -256,7 +256,7 @@ impl Default for Params {
             border_factor: 0.9,
             lost_factor: 0.4,
             join_radius_px: 80.0,
-            min_cable_score: 0.05,
+            min_cable_score: 0.03,
             min_cable_length_px: 30.0,
             smoothing: 1.0,
             knot_spacing_px: 45.0,
@@ -296,7 +296,7 @@ impl Default for Params {
             quality_field_exponent: 1.0,
             field_level: 0.3,
             field_min_share: 0.15,
-            field_border_min_score: 0.25,
+            field_border_min_score: 0.18,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
         }
