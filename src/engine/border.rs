@@ -113,10 +113,15 @@ fn cables_from(
         .collect();
     let confidence = vec![p.border_seed_confidence; seeds.len()];
     // Only such walks were kept, so every pairing ends on the border or a seed.
-    let picked: Vec<Pairing> = pairing::pair(&crossing, &confidence, p)
-        .into_iter()
-        .filter(|c| c.score >= min_score)
-        .collect();
+    let picked: Vec<Pairing> = pairing::pair(
+        &crossing,
+        &confidence,
+        p,
+        p.cable_score_floor(terrain.field.is_some()),
+    )
+    .into_iter()
+    .filter(|c| c.score >= min_score)
+    .collect();
     let seed_scene = Scene {
         walks: &crossing,
         seeds,

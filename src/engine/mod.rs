@@ -184,7 +184,12 @@ pub fn segment_with_confidence(
         })
         .collect();
     let walks = walk::walk_all(terrain, &seeds)?;
-    let chosen = pairing::pair(&walks, confidence, params);
+    let chosen = pairing::pair(
+        &walks,
+        confidence,
+        params,
+        params.cable_score_floor(field.is_some()),
+    );
     timings.walks = ms(t);
 
     let t = Instant::now();

@@ -44,8 +44,9 @@ pub struct Pairing {
 /// Pairs the ends using `walks` (see module docs); `confidence` holds one value in
 /// 0..=1 per end (1 for ends given by a caller, the detector's score otherwise). A cable
 /// that no second end confirms rests on its start end alone, so its score is scaled by
-/// that end's confidence. The result is ordered by decreasing score.
-pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
+/// that end's confidence. Hypotheses scoring below `min_score` are dropped
+/// ([`Params::cable_score_floor`]). The result is ordered by decreasing score.
+pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params, min_score: f32) -> Vec<Pairing> {
     let n_seeds = confidence.len();
     // Which ordered (from, to) closures exist, to find confirmed pairs.
     let closes = |from: usize, to: usize| {
@@ -75,7 +76,7 @@ pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing>
         })
         .collect();
     hypotheses.extend(joins(walks, confidence, params));
-    hypotheses.retain(|h| h.score >= params.min_cable_score);
+    hypotheses.retain(|h| h.score >= min_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
     let mut accepted = Vec::new();
@@ -178,7 +179,7 @@ mod tests {
             walk(2, WalkEnd::Border, 0.7),
             walk(3, WalkEnd::Lost, 0.9),
         ];
-        let got = pair(&walks, &[1.0; 4], &p);
+        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score);
         assert_eq!(got.len(), 3);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
         assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
@@ -200,13 +201,13 @@ mod tests {
         let mut b = walk(1, WalkEnd::Lost, 0.8);
         b.end_point = [140.0, 100.0];
         b.end_heading = [-1.0, 0.0];
-        let got = pair(&[a.clone(), b.clone()], &[1.0; 2], &p);
+        let got = pair(&[a.clone(), b.clone()], &[1.0; 2], &p, p.min_cable_score);
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         // Heads pointing the same way do not meet.
         b.end_heading = [1.0, 0.0];
         assert!(
-            pair(&[a, b], &[1.0; 2], &p)
+            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score)
                 .iter()
                 .all(|h| h.joined.is_none())
         );
@@ -220,7 +221,7 @@ mod tests {
         // Visual likelihood v scores v^0.5 · lost_factor: half the minimum score.
         let v = (0.5 * p.min_cable_score / p.lost_factor).powi(2);
         let weak = walk(1, WalkEnd::Lost, v);
-        assert!(pair(&[short, weak], &[1.0; 2], &p).is_empty());
+        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score).is_empty());
     }
 
     #[test]
@@ -235,7 +236,7 @@ mod tests {
         // A weak detection leaving through the frame (scoring half the minimum) is
         // dropped; a confirmed pair of weak detections is kept at full score.
         let weak = 0.5 * p.min_cable_score / (p.border_factor * walks[1].quality(&p));
-        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p);
+        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p, p.min_cable_score);
         assert_eq!(got.len(), 2);
         assert_eq!((got[0].start, got[0].score), (2, walks[2].quality(&p)));
         assert_eq!(got[1].start, 0);

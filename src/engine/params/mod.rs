@@ -96,7 +96,8 @@ pub struct Params {
     /// Two lost walks whose heads face each other at most this far apart are joined
     /// into one cable, pixels.
     pub join_radius_px: f32,
-    /// Cables scoring below this are not reported (0..1).
+    /// Cables scoring below this are not reported when no cable field guides the walks
+    /// (0..1).
     pub min_cable_score: f32,
     /// Walks shorter than this are never reported as cables, pixels.
     pub min_cable_length_px: f32,
@@ -214,6 +215,10 @@ pub struct Params {
     /// `border_min_score` when the field is used (its share already weeds out walks
     /// over the background, and lowers the scores it keeps).
     pub field_border_min_score: f32,
+    /// `min_cable_score` when the field is used: its share in every score keeps walks
+    /// over the background out, so weaker cables (a pale cable on a pale card, whose
+    /// lateral contrast is low) can be kept.
+    pub field_min_cable_score: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
     /// (README, "How the engine uses the field"). 1 or more: no such seeds.
@@ -256,7 +261,7 @@ impl Default for Params {
             border_factor: 0.9,
             lost_factor: 0.4,
             join_radius_px: 80.0,
-            min_cable_score: 0.03,
+            min_cable_score: 0.05,
             min_cable_length_px: 30.0,
             smoothing: 1.0,
             knot_spacing_px: 45.0,
@@ -297,6 +302,7 @@ impl Default for Params {
             field_level: 0.3,
             field_min_share: 0.15,
             field_border_min_score: 0.18,
+            field_min_cable_score: 0.03,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
         }
@@ -343,6 +349,16 @@ impl Params {
             refine: false,
             mask_width_px: 0.0,
             ..Self::default()
+        }
+    }
+
+    /// The least score of a reported cable: `field_min_cable_score` when a cable field
+    /// guides the walks, `min_cable_score` otherwise.
+    pub fn cable_score_floor(&self, field: bool) -> f32 {
+        if field {
+            self.field_min_cable_score
+        } else {
+            self.min_cable_score
         }
     }
 
