@@ -225,6 +225,18 @@ mod tests {
     }
 
     #[test]
+    fn the_field_lowers_the_floor_a_cable_must_reach() {
+        let p = Params::default();
+        // A lost walk scoring midway between the two floors.
+        let score = 0.5 * (p.field_min_cable_score + p.min_cable_score);
+        let weak = [walk(0, WalkEnd::Lost, (score / p.lost_factor).powi(2))];
+        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field)).len();
+        assert!(p.field_min_cable_score < p.min_cable_score);
+        assert_eq!(kept(true), 1);
+        assert_eq!(kept(false), 0);
+    }
+
+    #[test]
     fn unconfirmed_cables_rest_on_their_end_confidence() {
         let p = Params::default();
         let walks = vec![
