@@ -93,7 +93,7 @@ def focal_loss(pred, heat):
     return -(pos_loss.sum() + neg_loss.sum()) / pos.sum().clamp(min=1)
 
 
-def losses(out, t):
+def losses(out, t, end_weight=1.0):
     cable, heat, offset, end_mask, orient, agree = t
     l_cable = F.binary_cross_entropy(out[:, 0].clamp(1e-4, 1 - 1e-4), cable)
     l_end = focal_loss(out[:, 1], heat)
@@ -101,7 +101,7 @@ def losses(out, t):
         / end_mask.sum().clamp(min=1)
     l_orient = (F.l1_loss(out[:, 4:6], orient, reduction="none") * agree[:, None]).sum() \
         / agree.sum().clamp(min=1)
-    return 4.0 * l_cable + l_end + l_off + l_orient
+    return 4.0 * l_cable + end_weight * l_end + l_off + l_orient
 
 
 class SceneStream(torch.utils.data.IterableDataset):
@@ -237,6 +237,8 @@ def main():
                     help="also mosaic and drip-painting backgrounds (the bundled recipe; "
                          "--no-rich-textures leaves them out)")
     ap.add_argument("--holdout", choices=GROUPS)
+    ap.add_argument("--end-weight", type=float, default=1.0,
+                    help="weight of the terminal heatmap's loss against the rest")
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
     ap.add_argument("--workers", type=int, default=1, help="processes making scenes")
@@ -276,7 +278,7 @@ def main():
         SceneStream(train, args), batch_size=None, num_workers=args.workers))
     for step in range(1, args.steps + 1):
         x, t = next(stream)
-        loss = losses(model(x), t)
+        loss = losses(model(x), t, args.end_weight)
         opt.zero_grad()
         loss.backward()
         opt.step()
