@@ -112,16 +112,11 @@ fn cables_from(
         })
         .collect();
     let confidence = vec![p.border_seed_confidence; seeds.len()];
-    // Only such walks were kept, so every pairing ends on the border or a seed.
-    let picked: Vec<Pairing> = pairing::pair(
-        &crossing,
-        &confidence,
-        p,
-        p.cable_score_floor(terrain.field.is_some()),
-    )
-    .into_iter()
-    .filter(|c| c.score >= min_score)
-    .collect();
+    // Only such walks were kept, so every pairing ends on the border or a seed. These
+    // seeds' floor rises above any cable's; a hypothesis below it could only have
+    // claimed ends from others below it, so dropping it in the pairing keeps the rest.
+    let floor = min_score.max(p.cable_score_floor(terrain.field.is_some()));
+    let picked = pairing::pair(&crossing, &confidence, p, floor);
     let seed_scene = Scene {
         walks: &crossing,
         seeds,
