@@ -137,6 +137,12 @@ pub struct Params {
     /// A walk that finds no next vertex leaves through the border when within this many
     /// `border_margin_px` of an edge it heads to.
     pub stopped_border_reach: f32,
+    /// Superpixels whose centre lies closer to a seed than this many superpixel steps
+    /// join the seed's own, and its walks start from that region's other neighbours: a
+    /// small superpixel at a terminal is often wrapped by one whose centre is a pixel
+    /// or two away, a first step that gives no heading. 0: walks start from the seed
+    /// superpixel's neighbours, as in the paper.
+    pub seed_region_steps: f32,
     /// Exponent of the colour agreement in a walk's quality.
     pub quality_visual_exponent: f32,
     /// Exponent of the lateral contrast in a walk's quality (a walk over plain
@@ -274,6 +280,7 @@ impl Default for Params {
             border_outward_cos: 0.3,
             stopped_seed_reach: 2.0,
             stopped_border_reach: 2.0,
+            seed_region_steps: 0.4,
             quality_visual_exponent: 0.5,
             quality_contrast_exponent: 2.0,
             join_min_length: 0.5,
@@ -348,6 +355,7 @@ impl Params {
             border_cables: false,
             refine: false,
             mask_width_px: 0.0,
+            seed_region_steps: 0.0,
             ..Self::default()
         }
     }

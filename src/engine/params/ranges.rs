@@ -66,6 +66,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("border_outward_cos", 0.0, 1.0),
     ("stopped_seed_reach", 0.0, 10.0),
     ("stopped_border_reach", 0.0, 10.0),
+    ("seed_region_steps", 0.0, 2.0),
     ("quality_visual_exponent", 0.0, 10.0),
     ("quality_contrast_exponent", 0.0, 10.0),
     ("join_min_length", 0.0, 10.0),

@@ -1,7 +1,9 @@
 //! Walks on the region adjacency graph: likelihoods, extension and termination.
 //!
 //! From every end ("seed") a walk starts towards each ring-1 neighbour of the seed's
-//! superpixel; the first step fixes the initial heading. Each iteration scores every
+//! superpixel (of its region, when neighbours' centres lie within
+//! `seed_region_steps` superpixel steps of the seed); the first step fixes the initial
+//! heading. Each iteration scores every
 //! vertex of the order-d neighbourhood of the head that lies ahead,
 //! p = p_V · p_C · p_D · c · f, and appends the argmax:
 //!
@@ -123,15 +125,41 @@ pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, Engin
     let deadline = terrain.deadline;
     let mut walker = Walker::new(terrain, seeds);
     let mut walks = Vec::new();
+    let near_px = terrain.params.seed_region_steps * terrain.step_px;
     for (s, seed) in seeds.iter().enumerate() {
-        for &first in graph.neighbours(seed.vertex) {
+        let (region, firsts) = seed_region(graph, seed, near_px);
+        for first in firsts {
             deadline.check()?;
-            if let Some(w) = walker.run(s, first) {
+            if let Some(w) = walker.run(s, &region, first) {
                 walks.push(w);
             }
         }
     }
     Ok(walks)
+}
+
+/// A seed's region and the first steps of its walks. The region is the seed's
+/// superpixel plus, repeatedly, any neighbour whose centre lies within `near_px` of
+/// the seed (`seed_region_steps`); the first steps are the region's other neighbours.
+fn seed_region(graph: &Graph, seed: &Seed, near_px: f32) -> (Vec<u32>, Vec<u32>) {
+    let near = |v: u32| dist(graph.vertices[v as usize].centroid, seed.point) < near_px;
+    let mut region = vec![seed.vertex];
+    let mut firsts = Vec::new();
+    let mut i = 0;
+    while let Some(&v) = region.get(i) {
+        for &n in graph.neighbours(v) {
+            if region.contains(&n) || firsts.contains(&n) {
+                continue;
+            }
+            if near(n) {
+                region.push(n);
+            } else {
+                firsts.push(n);
+            }
+        }
+        i += 1;
+    }
+    (region, firsts)
 }
 
 /// A scored candidate for the next step.
@@ -189,13 +217,16 @@ impl<'a> Walker<'a> {
         self.graph.vertices[v as usize].centroid
     }
 
-    /// One walk from seed `s` whose first step goes to `first`.
-    fn run(&mut self, s: usize, first: u32) -> Option<Walk> {
+    /// One walk from seed `s` (whose region is `region`) whose first step goes to
+    /// `first`.
+    fn run(&mut self, s: usize, region: &[u32], first: u32) -> Option<Walk> {
         let p = self.params;
         let seed = self.seeds[s];
         self.walk_id += 1;
         let id = self.walk_id;
-        self.in_walk[seed.vertex as usize] = id;
+        for &v in region {
+            self.in_walk[v as usize] = id;
+        }
         self.in_walk[first as usize] = id;
         let mut vertices = vec![seed.vertex, first];
         let mut points = vec![seed.point, self.pos(first)];
@@ -328,5 +359,56 @@ impl<'a> Walker<'a> {
             || (here[0] > w - 1.0 - m && dir[0] > out)
             || (here[1] < m && dir[1] < -out)
             || (here[1] > h - 1.0 - m && dir[1] > out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::superpixels::Superpixels;
+
+    #[test]
+    fn a_wrapped_seed_superpixel_walks_from_the_wrapper_s_neighbours() {
+        // A 3x3 grid of 20 px superpixels (ids 0-8); a 4x4 one (id 9) at the centre of
+        // the middle one, which wraps it: the seed's only neighbour lies about a pixel
+        // away, a step that would give no heading.
+        let (w, h) = (60usize, 60usize);
+        let labels: Vec<u32> = (0..w * h)
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                if (28..32).contains(&x) && (28..32).contains(&y) {
+                    9
+                } else {
+                    (y / 20 * 3 + x / 20) as u32
+                }
+            })
+            .collect();
+        let sp = Superpixels {
+            width: w,
+            height: h,
+            labels,
+            count: 10,
+            step: 20.0,
+        };
+        let rgb = vec![120u8; w * h * 3];
+        let lab = LabImage::from_rgb(&rgb, w, h);
+        let graph = Graph::build(&sp, &rgb, &lab, 3);
+        assert_eq!(graph.neighbours(9), &[4]);
+        let seed = Seed {
+            point: [29.5, 29.5],
+            vertex: 9,
+        };
+        let (region, mut firsts) = seed_region(&graph, &seed, 0.4 * 20.0);
+        assert_eq!(region, vec![9, 4]);
+        firsts.sort_unstable();
+        assert_eq!(firsts, vec![1, 3, 5, 7]);
+        // Away from any wrapper the region is the seed's superpixel alone.
+        let corner = Seed {
+            point: [2.0, 2.0],
+            vertex: 0,
+        };
+        let (region, mut firsts) = seed_region(&graph, &corner, 0.4 * 20.0);
+        firsts.sort_unstable();
+        assert_eq!((region, firsts), (vec![0], vec![1, 3]));
     }
 }
