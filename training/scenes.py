@@ -119,15 +119,21 @@ def smooth_noise(nrng: np.random.Generator, h: int, w: int, scale: float) -> np.
 # on for the bundled model (`--no-rich-textures` leaves them out).
 RICH_TEXTURES = False
 
+# Share of composed and procedural scenes where one cable wears the background's colour
+# (a pale cable on pale card, a black one on dark paper, a red one on a red print):
+# train_field.py's `--camouflage`.
+CAMOUFLAGE = 0.0
 
-def background(rng: random.Random, h=IN_H, w=IN_W) -> np.ndarray:
+
+def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
+    """A procedural background; `base`, when given, is its main colour."""
     nrng = np.random.default_rng(rng.randrange(1 << 30))
     kinds = ["plain", "plain", "gradient", "wood", "paper", "fabric", "metal", "noise",
              "clutter", "clutter"]
     if RICH_TEXTURES:
         kinds += ["mosaic", "mosaic", "drips", "drips"]
     kind = rng.choice(kinds)
-    base = random_colour(rng)
+    base = random_colour(rng) if base is None else base
     img = np.ones((h, w, 3), np.float32) * base
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     if kind == "gradient":
@@ -303,10 +309,23 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
     scene.ends.extend(ends)
 
 
-def add_cables(scene: Scene, rng: random.Random, count: int):
-    for _ in range(count):
+def near_colour(rng: random.Random, colour: np.ndarray) -> np.ndarray:
+    """A colour a little off `colour`: brightness within 15 %, each channel within about
+    12 levels."""
+    jitter = np.array([rng.gauss(0, 12) for _ in range(3)], np.float32)
+    return np.clip(colour * rng.uniform(0.85, 1.15) + jitter, 0, 255)
+
+
+def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
+    """Draws `count` procedural cables; with `camouflage` the first wears the colour of
+    the background it lies on."""
+    for k in range(count):
         path = random_path(rng)
         colour, width = random_colour(rng), rng.uniform(2.5, 8.0)
+        if camouflage and k == 0:
+            h, w = scene.mask.shape
+            xy = np.clip(path.round().astype(int), 0, [w - 1, h - 1])
+            colour = near_colour(rng, np.median(scene.rgb[xy[:, 1], xy[:, 0]], axis=0))
         draw_cable(scene, path, rng, colour, width)
         if rng.random() < 0.25:  # a twin of the same colour alongside
             t = np.gradient(path, axis=0)
@@ -361,7 +380,12 @@ def composite(p: Photo, rng: random.Random) -> Scene:
         cables = np.clip(hue_rotate(cables, rng.uniform(0, 2 * math.pi)), 0, 255)
     if rng.random() < 0.3:
         cables = np.clip(cables * rng.uniform(0.3, 1.2), 0, 255)
-    rgb = cables * a + background(rng) * (1 - a)
+    base = None
+    if rng.random() < CAMOUFLAGE:  # the background wears one cable's colour
+        line = rng.choice(p.lines)
+        xy = np.clip(line.round().astype(int), 0, [p.mask.shape[1] - 1, p.mask.shape[0] - 1])
+        base = near_colour(rng, np.median(cables[xy[:, 1], xy[:, 0]], axis=0))
+    rgb = cables * a + background(rng, base=base) * (1 - a)
     return Scene(rgb, p.mask.copy(), [l.copy() for l in p.lines], list(p.ends))
 
 
@@ -446,7 +470,7 @@ def sample_scene(photos: list[Photo], rng: random.Random, real=0.25, composed=0.
             add_cables(scene, rng, rng.randrange(1, 3))
     else:
         scene = Scene(background(rng), np.zeros((IN_H, IN_W), np.float32))
-        add_cables(scene, rng, rng.randrange(1, 7))
+        add_cables(scene, rng, rng.randrange(1, 7), camouflage=rng.random() < CAMOUFLAGE)
         scene.rgb = np.clip(scene.rgb, 0, 255)
     scene = affine(scene, rng)
     scene.rgb = photometric(scene.rgb, rng)

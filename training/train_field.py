@@ -236,6 +236,9 @@ def main():
     ap.add_argument("--rich-textures", action=argparse.BooleanOptionalAction, default=True,
                     help="also mosaic and drip-painting backgrounds (the bundled recipe; "
                          "--no-rich-textures leaves them out)")
+    ap.add_argument("--camouflage", type=float, default=0.0,
+                    help="share of composed and procedural scenes where one cable wears "
+                         "the background's colour")
     ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--end-weight", type=float, default=1.0,
                     help="weight of the terminal heatmap's loss against the rest")
@@ -246,6 +249,7 @@ def main():
     args = ap.parse_args()
 
     scenes.RICH_TEXTURES = args.rich_textures
+    scenes.CAMOUFLAGE = args.camouflage
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     np.random.seed(args.seed)
