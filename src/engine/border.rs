@@ -116,7 +116,8 @@ fn cables_from(
     // seeds' floor rises above any cable's; a hypothesis below it could only have
     // claimed ends from others below it, so dropping it in the pairing keeps the rest.
     let floor = min_score.max(p.cable_score_floor(terrain.field.is_some()));
-    let picked = pairing::pair(&crossing, &confidence, p, floor);
+    // Walks from the border are not joined where they leave it again (no field given).
+    let picked = pairing::pair(&crossing, &confidence, p, floor, None);
     let seed_scene = Scene {
         walks: &crossing,
         seeds,

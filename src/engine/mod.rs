@@ -189,6 +189,7 @@ pub fn segment_with_confidence(
         confidence,
         params,
         params.cable_score_floor(field.is_some()),
+        field,
     );
     timings.walks = ms(t);
 

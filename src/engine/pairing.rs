@@ -8,10 +8,14 @@
 //!
 //! Two lost walks from different ends whose heads face each other across a short gap
 //! (a crossing or a glare spot they could not pass) are joined into one hypothesis
-//! between their ends.
+//! between their ends. So are two walks that leave the frame facing each other across
+//! a short gap along which the cable field shows cable: a cable that grazes the border
+//! (as well supported as a confirmed pair: each walk found the other's way out), not
+//! one that leaves the frame and comes back.
 
 use super::Params;
-use super::geometry::norm;
+use super::field::CableField;
+use super::geometry::{dist, norm};
 use super::walk::{Walk, WalkEnd};
 
 /// How an accepted cable's far end was found.
@@ -45,8 +49,15 @@ pub struct Pairing {
 /// 0..=1 per end (1 for ends given by a caller, the detector's score otherwise). A cable
 /// that no second end confirms rests on its start end alone, so its score is scaled by
 /// that end's confidence. Hypotheses scoring below `min_score` are dropped
-/// ([`Params::cable_score_floor`]). The result is ordered by decreasing score.
-pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params, min_score: f32) -> Vec<Pairing> {
+/// ([`Params::cable_score_floor`]). Walks that leave the frame are joined only where
+/// `field` shows the cable between them. The result is ordered by decreasing score.
+pub fn pair(
+    walks: &[Walk],
+    confidence: &[f32],
+    params: &Params,
+    min_score: f32,
+    field: Option<&CableField>,
+) -> Vec<Pairing> {
     let n_seeds = confidence.len();
     // Which ordered (from, to) closures exist, to find confirmed pairs.
     let closes = |from: usize, to: usize| {
@@ -75,7 +86,7 @@ pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params, min_score: f32)
             }
         })
         .collect();
-    hypotheses.extend(joins(walks, confidence, params));
+    hypotheses.extend(joins(walks, confidence, params, field));
     hypotheses.retain(|h| h.score >= min_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
@@ -96,23 +107,34 @@ pub fn pair(walks: &[Walk], confidence: &[f32], params: &Params, min_score: f32)
     accepted
 }
 
-/// Hypotheses joining two lost walks whose heads face each other within
+/// Hypotheses joining two lost walks, or two walks that leave the frame with the
+/// cable between their exits ([`grazes`]), whose heads face each other within
 /// `join_radius_px`, each turning at most `max_turn_deg` to meet the other; scored by
-/// the geometric means of the two walks' qualities and of their ends' confidences.
-fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
+/// the geometric means of the two walks' qualities and of their ends' confidences,
+/// times `unconfirmed_factor` for lost walks.
+fn joins(
+    walks: &[Walk],
+    confidence: &[f32],
+    params: &Params,
+    field: Option<&CableField>,
+) -> Vec<Pairing> {
     let cos_max = params.max_turn_deg.to_radians().cos();
-    let lost: Vec<(usize, &Walk)> = walks
+    let open: Vec<(usize, &Walk)> = walks
         .iter()
         .enumerate()
         .filter(|(_, w)| {
-            w.end == WalkEnd::Lost
-                && w.length_px >= params.min_cable_length_px * params.join_min_length
+            let joinable = match w.end {
+                WalkEnd::Lost => true,
+                WalkEnd::Border => field.is_some(),
+                WalkEnd::Seed(_) => false,
+            };
+            joinable && w.length_px >= params.min_cable_length_px * params.join_min_length
         })
         .collect();
     let mut out = Vec::new();
-    for (n, &(i, a)) in lost.iter().enumerate() {
-        for &(j, b) in &lost[n + 1..] {
-            if a.seed == b.seed {
+    for (n, &(i, a)) in open.iter().enumerate() {
+        for &(j, b) in &open[n + 1..] {
+            if a.seed == b.seed || a.end != b.end {
                 continue;
             }
             let gap = [
@@ -131,6 +153,11 @@ fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
                 a.end_heading[0] * ux + a.end_heading[1] * uy >= cos_max
                     && -(b.end_heading[0] * ux + b.end_heading[1] * uy) >= cos_max
             };
+            let factor = match (a.end, field) {
+                (WalkEnd::Border, Some(f)) if grazes(f, a.end_point, b.end_point, params) => 1.0,
+                (WalkEnd::Border, _) => continue,
+                _ => params.unconfirmed_factor,
+            };
             if facing {
                 out.push(Pairing {
                     start: a.seed,
@@ -142,12 +169,25 @@ fn joins(walks: &[Walk], confidence: &[f32], params: &Params) -> Vec<Pairing> {
                         * confidence[a.seed]
                         * confidence[b.seed])
                         .sqrt()
-                        * params.unconfirmed_factor,
+                        * factor,
                 });
             }
         }
     }
     out
+}
+
+/// True when the field shows cable (at least `field_level`) along most of the
+/// straight gap between two border walks' exits `a` and `b` (just inside the frame).
+fn grazes(field: &CableField, a: [f32; 2], b: [f32; 2], params: &Params) -> bool {
+    let n = (dist(a, b) / 2.0).ceil().max(1.0) as usize;
+    let line: Vec<[f32; 2]> = (0..=n)
+        .map(|k| {
+            let t = k as f32 / n as f32;
+            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+        })
+        .collect();
+    field.share_on_cable(&line, params.field_level) >= 0.5
 }
 
 #[cfg(test)]
@@ -179,7 +219,7 @@ mod tests {
             walk(2, WalkEnd::Border, 0.7),
             walk(3, WalkEnd::Lost, 0.9),
         ];
-        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score);
+        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score, None);
         assert_eq!(got.len(), 3);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
         assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
@@ -201,16 +241,59 @@ mod tests {
         let mut b = walk(1, WalkEnd::Lost, 0.8);
         b.end_point = [140.0, 100.0];
         b.end_heading = [-1.0, 0.0];
-        let got = pair(&[a.clone(), b.clone()], &[1.0; 2], &p, p.min_cable_score);
+        let got = pair(
+            &[a.clone(), b.clone()],
+            &[1.0; 2],
+            &p,
+            p.min_cable_score,
+            None,
+        );
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         // Heads pointing the same way do not meet.
         b.end_heading = [1.0, 0.0];
         assert!(
-            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score)
+            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score, None)
                 .iter()
                 .all(|h| h.joined.is_none())
         );
+    }
+
+    #[test]
+    fn walks_leaving_the_frame_face_to_face_join_where_the_field_shows_the_cable() {
+        let p = Params::default();
+        // Two walks leave the bottom of a 160x80 frame 40 px apart, heading towards
+        // each other: a cable grazing the border, or one leaving and coming back.
+        let leaving = |seed, x: f32, dx: f32| {
+            let mut w = walk(seed, WalkEnd::Border, 0.8);
+            w.end_point = [x, 76.0];
+            let n = (dx * dx + 0.09).sqrt();
+            w.end_heading = [dx / n, 0.3 / n];
+            w
+        };
+        let walks = [leaving(0, 60.0, 1.0), leaving(1, 100.0, -1.0)];
+        let field = |bottom: f32| CableField {
+            width: 20,
+            height: 10,
+            cell_px: [8.0, 8.0],
+            cable: (0..200)
+                .map(|i| if i >= 180 { bottom } else { 0.0 })
+                .collect(),
+            orientation: vec![[1.0, 0.0]; 200],
+        };
+        let grazing = field(0.9);
+        let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, Some(&grazing));
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
+        assert_eq!(got[0].score, walks[0].quality(&p));
+        // Background between the exits (the cable left the frame), or no field: two
+        // cables, each through the border.
+        let left = field(0.0);
+        for field in [Some(&left), None] {
+            let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, field);
+            assert_eq!(got.len(), 2);
+            assert!(got.iter().all(|h| h.far == FarEnd::Border));
+        }
     }
 
     #[test]
@@ -221,7 +304,7 @@ mod tests {
         // Visual likelihood v scores v^0.5 · lost_factor: half the minimum score.
         let v = (0.5 * p.min_cable_score / p.lost_factor).powi(2);
         let weak = walk(1, WalkEnd::Lost, v);
-        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score).is_empty());
+        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score, None).is_empty());
     }
 
     #[test]
@@ -230,7 +313,7 @@ mod tests {
         // A lost walk scoring midway between the two floors.
         let score = 0.5 * (p.field_min_cable_score + p.min_cable_score);
         let weak = [walk(0, WalkEnd::Lost, (score / p.lost_factor).powi(2))];
-        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field)).len();
+        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field), None).len();
         assert!(p.field_min_cable_score < p.min_cable_score);
         assert_eq!(kept(true), 1);
         assert_eq!(kept(false), 0);
@@ -248,7 +331,7 @@ mod tests {
         // A weak detection leaving through the frame (scoring half the minimum) is
         // dropped; a confirmed pair of weak detections is kept at full score.
         let weak = 0.5 * p.min_cable_score / (p.border_factor * walks[1].quality(&p));
-        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p, p.min_cable_score);
+        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p, p.min_cable_score, None);
         assert_eq!(got.len(), 2);
         assert_eq!((got[0].start, got[0].score), (2, walks[2].quality(&p)));
         assert_eq!(got[1].start, 0);

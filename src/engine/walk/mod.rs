@@ -39,7 +39,7 @@ mod step;
 
 use super::color::LabImage;
 use super::field::VertexField;
-use super::geometry::{dist, heading, norm};
+use super::geometry::{border_exit, dist, heading, norm};
 use super::graph::{Graph, Neighbourhood};
 use super::{Deadline, EngineError, Params};
 
@@ -85,7 +85,8 @@ pub struct Walk {
     pub length_px: f32,
     /// Unit heading at the walk's head.
     pub end_heading: [f32; 2],
-    /// Position of the walk's head, pixels.
+    /// Position of the walk's head, pixels; for a walk that left through the border,
+    /// where its final heading comes within `EXIT_INSET_PX` of the frame.
     pub end_point: [f32; 2],
 }
 
@@ -137,6 +138,10 @@ pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, Engin
     }
     Ok(walks)
 }
+
+/// How far inside the frame a border walk's exit is placed (`Walk::end_point`): where
+/// the cable field is still read from the photo rather than from the padding.
+const EXIT_INSET_PX: f32 = 3.0;
 
 /// A seed's region and the first steps of its walks. The region is the seed's
 /// superpixel plus, repeatedly, any neighbour whose centre lies within `near_px` of
@@ -286,11 +291,18 @@ impl<'a> Walker<'a> {
             end = self.classify(s, &points, length);
         }
         let n = steps.max(1) as f32;
+        let end = end.unwrap_or(WalkEnd::Lost);
+        let end_heading = heading(&points, p.heading_span_px);
+        let head = *points.last().unwrap_or(&seed.point);
+        let end_point = match end {
+            WalkEnd::Border => self.exit(head, end_heading).unwrap_or(head),
+            _ => head,
+        };
         Some(Walk {
-            end_heading: heading(&points, p.heading_span_px),
-            end_point: *points.last().unwrap_or(&seed.point),
+            end_heading,
+            end_point,
             seed: s,
-            end: end.unwrap_or(WalkEnd::Lost),
+            end,
             visual: (log_visual / n).exp(),
             smoothness: (log_curve / n).exp(),
             contrast: contrast_sum / (vertices.len() - 1) as f32,
@@ -298,6 +310,15 @@ impl<'a> Walker<'a> {
             length_px: length,
             vertices,
         })
+    }
+
+    /// Where a ray from `from` along `dir` comes within `EXIT_INSET_PX` of the frame.
+    fn exit(&self, from: [f32; 2], dir: [f32; 2]) -> Option<[f32; 2]> {
+        let i = EXIT_INSET_PX;
+        let inner = |n: usize| n.saturating_sub(2 * i as usize);
+        let (w, h) = (inner(self.lab.width), inner(self.lab.height));
+        let exit = border_exit([from[0] - i, from[1] - i], dir, w, h, f32::INFINITY)?;
+        Some([exit[0] + i, exit[1] + i])
     }
 
     /// Termination after a step: another seed reached, or the frame left.
