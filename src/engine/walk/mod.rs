@@ -139,9 +139,9 @@ pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, Engin
     Ok(walks)
 }
 
-/// How far inside the frame a border walk's exit is placed (`Walk::end_point`): where
-/// the cable field is still read from the photo rather than from the padding.
-const EXIT_INSET_PX: f32 = 3.0;
+/// How far inside the frame a border walk's exit is placed (`Walk::end_point`), so
+/// that what is read there is the photo's last pixels.
+const EXIT_INSET_PX: f32 = 1.0;
 
 /// A seed's region and the first steps of its walks. The region is the seed's
 /// superpixel plus, repeatedly, any neighbour whose centre lies within `near_px` of
