@@ -153,25 +153,26 @@ fn joins(
                 a.end_heading[0] * ux + a.end_heading[1] * uy >= cos_max
                     && -(b.end_heading[0] * ux + b.end_heading[1] * uy) >= cos_max
             };
+            if !facing {
+                continue;
+            }
             let factor = match (a.end, field) {
                 (WalkEnd::Border, Some(f)) if grazes(f, a.end_point, b.end_point, params) => 1.0,
                 (WalkEnd::Border, _) => continue,
                 _ => params.unconfirmed_factor,
             };
-            if facing {
-                out.push(Pairing {
-                    start: a.seed,
-                    far: FarEnd::Seed(b.seed),
-                    walk: i,
-                    joined: Some(j),
-                    score: (a.quality(params)
-                        * b.quality(params)
-                        * confidence[a.seed]
-                        * confidence[b.seed])
-                        .sqrt()
-                        * factor,
-                });
-            }
+            out.push(Pairing {
+                start: a.seed,
+                far: FarEnd::Seed(b.seed),
+                walk: i,
+                joined: Some(j),
+                score: (a.quality(params)
+                    * b.quality(params)
+                    * confidence[a.seed]
+                    * confidence[b.seed])
+                    .sqrt()
+                    * factor,
+            });
         }
     }
     out
