@@ -316,6 +316,13 @@ def near_colour(rng: random.Random, colour: np.ndarray) -> np.ndarray:
     return np.clip(colour * rng.uniform(0.85, 1.15) + jitter, 0, 255)
 
 
+def colour_along(rgb: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """The median colour of `rgb` at the points of `path` (clipped to the image)."""
+    h, w = rgb.shape[:2]
+    xy = np.clip(path.round().astype(int), 0, [w - 1, h - 1])
+    return np.median(rgb[xy[:, 1], xy[:, 0]], axis=0)
+
+
 def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
     """Draws `count` procedural cables; with `camouflage` the first wears the colour of
     the background it lies on."""
@@ -323,9 +330,7 @@ def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
         path = random_path(rng)
         colour, width = random_colour(rng), rng.uniform(2.5, 8.0)
         if camouflage and k == 0:
-            h, w = scene.mask.shape
-            xy = np.clip(path.round().astype(int), 0, [w - 1, h - 1])
-            colour = near_colour(rng, np.median(scene.rgb[xy[:, 1], xy[:, 0]], axis=0))
+            colour = near_colour(rng, colour_along(scene.rgb, path))
         draw_cable(scene, path, rng, colour, width)
         if rng.random() < 0.25:  # a twin of the same colour alongside
             t = np.gradient(path, axis=0)
@@ -382,9 +387,7 @@ def composite(p: Photo, rng: random.Random) -> Scene:
         cables = np.clip(cables * rng.uniform(0.3, 1.2), 0, 255)
     base = None
     if rng.random() < CAMOUFLAGE:  # the background wears one cable's colour
-        line = rng.choice(p.lines)
-        xy = np.clip(line.round().astype(int), 0, [p.mask.shape[1] - 1, p.mask.shape[0] - 1])
-        base = near_colour(rng, np.median(cables[xy[:, 1], xy[:, 0]], axis=0))
+        base = near_colour(rng, colour_along(cables, rng.choice(p.lines)))
     rgb = cables * a + background(rng, base=base) * (1 - a)
     return Scene(rgb, p.mask.copy(), [l.copy() for l in p.lines], list(p.ends))
 

@@ -15,7 +15,8 @@
 
 use super::Params;
 use super::field::CableField;
-use super::geometry::{dist, norm};
+use super::geometry::norm;
+use super::spline::resample;
 use super::walk::{Walk, WalkEnd};
 
 /// How an accepted cable's far end was found.
@@ -181,15 +182,11 @@ fn joins(
 /// True when the field shows cable (at least `field_level`) along most of the
 /// straight gap between two border walks' exits `a` and `b` (just inside the frame).
 fn grazes(field: &CableField, a: [f32; 2], b: [f32; 2], params: &Params) -> bool {
-    let n = (dist(a, b) / 2.0).ceil().max(1.0) as usize;
-    let line: Vec<[f32; 2]> = (0..=n)
-        .map(|k| {
-            let t = k as f32 / n as f32;
-            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
-        })
-        .collect();
-    field.share_on_cable(&line, params.field_level) >= 0.5
+    field.share_on_cable(&resample(&[a, b], GRAZE_SAMPLE_PX), params.field_level) >= 0.5
 }
+
+/// Spacing of the field's readings along a gap at the border, pixels.
+const GRAZE_SAMPLE_PX: f32 = 2.0;
 
 #[cfg(test)]
 mod tests {
