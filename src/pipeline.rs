@@ -162,7 +162,13 @@ impl Pass {
         let image = frame.resample(photo);
         let resample_ms = ms(t);
         let t = Instant::now();
-        let seen = job.network.map(|n| n.detect(&image)).transpose()?;
+        // An enlarged photo reaches the network from its own pixels: enlarging it and
+        // shrinking it again into the network's input blurs what the network sees.
+        let source = if frame.scale() > 1.0 { photo } else { &image };
+        let seen = job
+            .network
+            .map(|n| n.detect_as(source, frame.working))
+            .transpose()?;
         let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
         let ends = match (job.ends, &seen) {
             (Some(points), _) => Ends::given(

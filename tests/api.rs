@@ -35,7 +35,11 @@ fn scene() -> &'static synth::Scene {
 struct FakeDetector;
 
 impl EndpointDetector for FakeDetector {
-    fn detect(&self, _image: &image::RgbImage) -> Result<Perception, DetectError> {
+    fn detect_as(
+        &self,
+        _image: &image::RgbImage,
+        _size: [u32; 2],
+    ) -> Result<Perception, DetectError> {
         let ends = scene()
             .ends()
             .into_iter()

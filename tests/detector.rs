@@ -9,6 +9,7 @@ use std::process::Command;
 
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, Ends, OnnxDetector};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
+use image::imageops::FilterType;
 
 /// Weighted IoU floors (simple, hard) with a photo alone: measured 0.696 and 0.645
 /// (README, Accuracy). These photos are in the network's training set, but its training
@@ -81,6 +82,36 @@ fn portrait_photos_are_seen_at_the_landscape_scale() {
         turned >= upright - 0.08,
         "portrait {turned:.3} vs {upright:.3}"
     );
+}
+
+/// A photo segmented enlarged (a small camera's) reaches the network from its own
+/// pixels: a development photo taken at half size and shown as a 640x480 frame gives the
+/// ends the full-size photo gives, in the frame's pixels, and a field over the frame.
+#[test]
+fn a_small_photo_shown_as_a_larger_frame_is_seen_from_its_own_pixels() {
+    let detector = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
+    let samples = eval::load_dataset(&eval::default_dataset_dir()).expect("dataset");
+    let (mut same, mut total) = (0, 0);
+    for s in samples.iter().filter(|s| s.set == "simple").step_by(4) {
+        let bytes = std::fs::read(&s.image).unwrap();
+        let photo = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
+        let small = image::imageops::resize(&photo, 320, 240, FilterType::Triangle);
+        let full = Ends::detected(&detector.detect(&photo).unwrap().ends).points;
+        let framed = detector.detect_as(&small, [640, 480]).unwrap();
+        let ends = Ends::detected(&framed.ends).points;
+        same += eval::match_points(&ends, &full, 3.0);
+        total += full.len().max(ends.len());
+        let field = framed.field.unwrap();
+        let covered = [
+            field.width as f32 * field.cell_px[0],
+            field.height as f32 * field.cell_px[1],
+        ];
+        assert_eq!(covered, [640.0, 480.0]);
+    }
+    let share = same as f64 / total as f64;
+    eprintln!("{same} of {total} ends within 3 px of the full-size photo's");
+    assert!(share >= 0.9, "{share:.3}");
 }
 
 /// End to end on the development split with the bundled network: a photo alone (its

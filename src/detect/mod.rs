@@ -42,8 +42,15 @@ pub struct Perception {
 
 /// Finds cable ends (and, with a cable-field model, the cable field) in a photo.
 pub trait EndpointDetector: Send + Sync {
-    /// What the network sees in `image`.
-    fn detect(&self, image: &RgbImage) -> Result<Perception, DetectError>;
+    /// What the network sees in `image`, in `image`'s pixels.
+    fn detect(&self, image: &RgbImage) -> Result<Perception, DetectError> {
+        self.detect_as(image, [image.width(), image.height()])
+    }
+
+    /// What the network sees in `image` shown as a `size` (width, height) photo, in
+    /// the pixels of that size: the network's input is resampled from `image` itself,
+    /// so a photo segmented enlarged reaches the network without being enlarged first.
+    fn detect_as(&self, image: &RgbImage, size: [u32; 2]) -> Result<Perception, DetectError>;
 }
 
 /// Errors loading or running a detector.

@@ -147,7 +147,7 @@ impl OnnxDetector {
         for session in &detector.sessions {
             let mut session = session.lock().unwrap_or_else(PoisonError::into_inner);
             detector
-                .run(&mut session, &grey)
+                .run(&mut session, &grey, [grey.width(), grey.height()])
                 .map_err(|e| DetectError::Model {
                     path: config.model.clone(),
                     message: format!("warm-up inference: {e}"),
@@ -156,9 +156,15 @@ impl OnnxDetector {
         Ok(detector)
     }
 
-    /// Resizes `image` into the input, runs `session` and decodes its output.
-    fn run(&self, session: &mut Session, image: &RgbImage) -> Result<Perception, DetectError> {
-        let fit = self.input.fit(image.width(), image.height());
+    /// Resizes `image` into the input of a `size` photo, runs `session` and decodes its
+    /// output in the pixels of `size`.
+    fn run(
+        &self,
+        session: &mut Session,
+        image: &RgbImage,
+        size: [u32; 2],
+    ) -> Result<Perception, DetectError> {
+        let fit = self.input.fit(size[0], size[1]);
         let fit = match self.kind {
             ModelKind::Yolo => fit.centred(),
             ModelKind::Field | ModelKind::Heatmap => fit,
@@ -199,8 +205,8 @@ impl OnnxDetector {
 }
 
 impl EndpointDetector for OnnxDetector {
-    fn detect(&self, image: &RgbImage) -> Result<Perception, DetectError> {
-        self.run(&mut self.session(), image)
+    fn detect_as(&self, image: &RgbImage, size: [u32; 2]) -> Result<Perception, DetectError> {
+        self.run(&mut self.session(), image, size)
     }
 }
 

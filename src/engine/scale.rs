@@ -107,7 +107,9 @@ impl WorkingFrame {
 
     /// The photo resampled to the working size: the mean of each output pixel's box of
     /// photo pixels when it shrinks at least twofold (one pass over the photo), a
-    /// triangle filter otherwise, the photo itself when the sizes agree.
+    /// triangle filter when it shrinks less, Catmull-Rom when it is enlarged (sharper
+    /// edges between superpixels than a triangle's), the photo itself when the sizes
+    /// agree.
     pub fn resample<'a>(&self, photo: &'a RgbImage) -> Cow<'a, RgbImage> {
         let [w, h] = self.working;
         if self.is_identity() {
@@ -115,12 +117,12 @@ impl WorkingFrame {
         } else if 2 * w <= self.photo[0] && 2 * h <= self.photo[1] {
             Cow::Owned(box_shrink(photo, w, h))
         } else {
-            Cow::Owned(imageops::resize(
-                photo,
-                w,
-                h,
-                imageops::FilterType::Triangle,
-            ))
+            let filter = if w > self.photo[0] {
+                imageops::FilterType::CatmullRom
+            } else {
+                imageops::FilterType::Triangle
+            };
+            Cow::Owned(imageops::resize(photo, w, h, filter))
         }
     }
 }
