@@ -124,6 +124,11 @@ RICH_TEXTURES = False
 # train_field.py's `--camouflage`.
 CAMOUFLAGE = 0.0
 
+# Chance that a procedural cable's end wears an insulated sleeve (a bootlace ferrule or a
+# crimp terminal's barrel: a short, wider collar of its own colour, often followed by
+# metal), as switchgear wiring does: train_field.py's `--sleeves`.
+SLEEVES = 0.0
+
 
 def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
     """A procedural background; `base`, when given, is its main colour."""
@@ -283,11 +288,14 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
     da.line(pts, fill=255, width=max(1, round(wpx)))
     db.line(pts, fill=255, width=max(1, round(wpx)))
     ends = []
-    for end, prev in ((path[0], path[min(3, len(path) - 1)]), (path[-1], path[max(-4, -len(path))])):
+    heads = ((path[0], path[min(3, len(path) - 1)]), (path[-1], path[max(-4, -len(path))]))
+    for i, (end, prev) in enumerate(heads):
         tol = BORDER_TOLERANCE_PX * INPUT_SCALE
         if not (tol <= end[0] <= w - 1 - tol and tol <= end[1] <= h - 1 - tol):
             continue
         ends.append((float(end[0]), float(end[1])))
+        if SLEEVES > 0 and rng.random() < SLEEVES:
+            draw_sleeve(dl, da, path, i == 0, wpx, ss, rng)
         if rng.random() < terminals_p:  # a metal terminal beyond the insulation
             d = end - prev
             d = d / (np.linalg.norm(d) + 1e-9)
@@ -307,6 +315,26 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
     scene.mask = np.maximum(scene.mask, b)
     scene.lines.append(path.copy())
     scene.ends.extend(ends)
+
+
+def draw_sleeve(dl: ImageDraw.ImageDraw, da: ImageDraw.ImageDraw, path: np.ndarray,
+                at_start: bool, wpx: float, ss: int, rng: random.Random):
+    """Draws an insulated sleeve over the last 1.5-4 widths of `path` (its start when
+    `at_start`) on the supersampled layer `dl` and alpha `da`: 1-1.6 times as wide as
+    the cable (`wpx` supersampled px), of a random colour, with a darker rim."""
+    pts = path if at_start else path[::-1]
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    arc = np.concatenate([[0.0], np.cumsum(steps)])
+    length = wpx / ss * rng.uniform(1.5, 4.0)
+    collar = [tuple(p * ss) for p in pts[arc <= length]]
+    if len(collar) < 2:
+        collar = [tuple(pts[0] * ss), tuple(pts[1] * ss)]
+    colour = random_colour(rng)
+    sw = wpx * rng.uniform(1.0, 1.6)
+    rim = tuple(int(v) for v in colour * rng.uniform(0.3, 0.7))
+    dl.line(collar, fill=rim, width=max(1, round(sw)))
+    dl.line(collar, fill=tuple(int(v) for v in colour), width=max(1, round(sw * 0.7)))
+    da.line(collar, fill=255, width=max(1, round(sw)))
 
 
 def near_colour(rng: random.Random, colour: np.ndarray) -> np.ndarray:
