@@ -7,6 +7,10 @@
 
 use super::superpixels::Superpixels;
 
+/// Spacing of the field's readings along a straight gap (a walk's step, the gap between
+/// two exits at the border), pixels: a quarter of a cell at 640x480.
+pub const GAP_SAMPLE_PX: f32 = 2.0;
+
 /// A cable-probability and orientation grid over the photo.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CableField {

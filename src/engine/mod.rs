@@ -167,6 +167,7 @@ pub fn segment_with_confidence(
         graph: &graph,
         lab: &lab,
         field: vertex_field.as_deref(),
+        field_map: field,
         step_px: sp.step,
         params,
         deadline,

@@ -14,7 +14,7 @@
 //! one that leaves the frame and comes back.
 
 use super::Params;
-use super::field::CableField;
+use super::field::{CableField, GAP_SAMPLE_PX};
 use super::geometry::norm;
 use super::spline::resample;
 use super::walk::{Walk, WalkEnd};
@@ -182,11 +182,8 @@ fn joins(
 /// True when the field shows cable (at least `field_level`) along most of the
 /// straight gap between two border walks' exits `a` and `b` (just inside the frame).
 fn grazes(field: &CableField, a: [f32; 2], b: [f32; 2], params: &Params) -> bool {
-    field.share_on_cable(&resample(&[a, b], GRAZE_SAMPLE_PX), params.field_level) >= 0.5
+    field.share_on_cable(&resample(&[a, b], GAP_SAMPLE_PX), params.field_level) >= 0.5
 }
-
-/// Spacing of the field's readings along a gap at the border, pixels.
-const GRAZE_SAMPLE_PX: f32 = 2.0;
 
 #[cfg(test)]
 mod tests {

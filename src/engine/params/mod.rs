@@ -207,6 +207,10 @@ pub struct Params {
     /// A candidate whose mean cable probability is below this is refused (the walk has
     /// left the cables).
     pub field_min_cable: f32,
+    /// A step whose straight line runs more than one superpixel step where the cable
+    /// probability is below this is refused: a step may skip superpixels (a crossing, a
+    /// terminal's metal) but not cross the background from one cable onto another.
+    pub field_gap_min_cable: f32,
     /// A candidate whose mean cable probability is at least this is accepted even when
     /// its lateral contrast is low (a dark cable on a dark background).
     pub field_trust: f32,
@@ -304,6 +308,7 @@ impl Default for Params {
             field_floor: 0.1,
             field_alignment_weight: 0.5,
             field_min_cable: 0.0,
+            field_gap_min_cable: 0.02,
             field_trust: 0.6,
             quality_field_exponent: 1.0,
             field_level: 0.3,

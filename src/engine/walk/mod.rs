@@ -25,9 +25,12 @@
 //!   ([`alignment`]), ε = `field_floor`, w = `field_alignment_weight`; 1 otherwise.
 //!
 //! The argmax is refused (the walk stops) when its colour similarity is below
-//! `min_similarity`, when its cable probability is below `field_min_cable`, or when its
-//! contrast is below `min_contrast` unless the field is sure (p ≥ `field_trust`) that it
-//! is a cable.
+//! `min_similarity`, when its cable probability is below `field_min_cable`, when the
+//! straight line from the head to it runs more than one superpixel step where the
+//! field's cable probability is below `field_gap_min_cable` (a step may skip
+//! superpixels — a crossing, a terminal's metal — but not cross the background from one
+//! cable to another), or when its contrast is below `min_contrast` unless the field is
+//! sure (p ≥ `field_trust`) that it is a cable.
 //!
 //! A walk ends on reaching another seed (within r), on leaving the frame, when the best
 //! candidate's colour no longer matches the model (it left the cable) or at the
@@ -38,7 +41,7 @@
 mod step;
 
 use super::color::LabImage;
-use super::field::VertexField;
+use super::field::{CableField, VertexField};
 use super::geometry::{border_exit, dist, heading, norm};
 use super::graph::{Graph, Neighbourhood};
 use super::{Deadline, EngineError, Params};
@@ -112,6 +115,8 @@ pub struct Terrain<'a> {
     pub lab: &'a LabImage,
     /// The cable field's mean over each vertex, when a field is used.
     pub field: Option<&'a [VertexField]>,
+    /// The cable field itself, when a field is used: read along each step's line.
+    pub field_map: Option<&'a CableField>,
     /// Nominal superpixel step, pixels.
     pub step_px: f32,
     /// Parameters.
@@ -180,6 +185,7 @@ struct Walker<'a> {
     graph: &'a Graph,
     lab: &'a LabImage,
     field: Option<&'a [VertexField]>,
+    field_map: Option<&'a CableField>,
     seeds: &'a [Seed],
     params: &'a Params,
     /// Lateral offset at which contrast is sampled: one superpixel step.
@@ -198,6 +204,7 @@ impl<'a> Walker<'a> {
             graph,
             lab,
             field,
+            field_map,
             step_px,
             params,
             deadline: _,
@@ -206,6 +213,7 @@ impl<'a> Walker<'a> {
             graph,
             lab,
             field,
+            field_map,
             seeds,
             params,
             side_px: step_px,
@@ -387,6 +395,78 @@ impl<'a> Walker<'a> {
 mod tests {
     use super::*;
     use crate::engine::superpixels::Superpixels;
+
+    /// The walks from seed `seed` on a dark line along the middle of a 200x60 grey
+    /// photo cut into 20 px superpixels (ids 0-9 the top row, 10-19 the line, 20-29 the
+    /// bottom row), where the field shows cable on the line's first three and last three
+    /// superpixels only (a painted line or a shadow joins two cables), under `params`:
+    /// the vertices each visits.
+    fn walks_along_a_line_the_field_breaks(params: &Params) -> Vec<Vec<u32>> {
+        let (w, h) = (200usize, 60usize);
+        let labels: Vec<u32> = (0..w * h)
+            .map(|p| ((p / w) / 20 * 10 + p % w / 20) as u32)
+            .collect();
+        let sp = Superpixels {
+            width: w,
+            height: h,
+            labels,
+            count: 30,
+            step: 20.0,
+        };
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|p| [if (20..40).contains(&(p / w)) { 40 } else { 160 }; 3])
+            .collect();
+        let lab = LabImage::from_rgb(&rgb, w, h);
+        let graph = Graph::build(&sp, &rgb, &lab, 3);
+        // 10 px cells: cable where the line is on x < 60 or x >= 140.
+        let cable = |i: usize| (2..4).contains(&(i / 20)) && !(6..14).contains(&(i % 20));
+        let field = CableField {
+            width: 20,
+            height: 6,
+            cell_px: [10.0, 10.0],
+            cable: (0..120).map(|i| if cable(i) { 1.0 } else { 0.0 }).collect(),
+            orientation: vec![[1.0, 0.0]; 120],
+        };
+        let vertex_field = field.per_vertex(&sp);
+        let terrain = Terrain {
+            graph: &graph,
+            lab: &lab,
+            field: Some(&vertex_field),
+            field_map: Some(&field),
+            step_px: 20.0,
+            params,
+            deadline: Deadline::NONE,
+        };
+        // The end of the left cable, at the right edge of superpixel 12.
+        let seeds = [Seed {
+            point: [58.0, 30.0],
+            vertex: 12,
+        }];
+        walk_all(terrain, &seeds)
+            .unwrap()
+            .into_iter()
+            .map(|w| w.vertices)
+            .collect()
+    }
+
+    #[test]
+    fn a_walk_does_not_cross_a_stretch_the_field_calls_background() {
+        let reaches_the_right_cable = |params: &Params| {
+            walks_along_a_line_the_field_breaks(params)
+                .iter()
+                .any(|v| v.iter().any(|&u| (17..20).contains(&u)))
+        };
+        let mut p = Params {
+            field_gap_min_cable: 0.0,
+            ..Params::default()
+        };
+        assert!(reaches_the_right_cable(&p), "the crossing this rule stops");
+        p.field_gap_min_cable = Params::default().field_gap_min_cable;
+        assert!(!reaches_the_right_cable(&p));
+        // The walk along its own cable is not affected.
+        let walks = walks_along_a_line_the_field_breaks(&p);
+        assert!(walks.iter().any(|v| v.contains(&10)), "{walks:?}");
+    }
 
     #[test]
     fn a_wrapped_seed_superpixel_walks_from_the_wrapper_s_neighbours() {

@@ -2,9 +2,10 @@
 //! and the rule that refuses the best one (module docs of [`super`]).
 
 use super::{Candidate, Walker};
-use crate::engine::field::{VertexField, alignment};
+use crate::engine::field::{GAP_SAMPLE_PX, VertexField, alignment};
 use crate::engine::geometry::{dist3, norm};
 use crate::engine::graph::intersection;
+use crate::engine::spline::resample;
 
 impl Walker<'_> {
     /// The best acceptable next vertex among those within `order` hops of `head`.
@@ -69,7 +70,31 @@ impl Walker<'_> {
             b.similarity >= p.min_similarity
                 && (!field || b.cable >= p.field_min_cable)
                 && (b.contrast >= p.min_contrast || sure)
+                && !self.crosses_background(here, self.pos(b.vertex))
         })
+    }
+
+    /// True when the straight line from `a` to `b` runs longer than one superpixel step
+    /// where the field's cable probability is below `field_gap_min_cable` (never
+    /// without a field).
+    fn crosses_background(&self, a: [f32; 2], b: [f32; 2]) -> bool {
+        let Some(field) = self.field_map else {
+            return false;
+        };
+        let level = self.params.field_gap_min_cable;
+        let line = resample(&[a, b], GAP_SAMPLE_PX);
+        let mut run = 0.0f32;
+        for q in &line {
+            run = if field.cable_at(q[0], q[1]) < level {
+                run + GAP_SAMPLE_PX
+            } else {
+                0.0
+            };
+            if run > self.side_px {
+                return true;
+            }
+        }
+        false
     }
 
     /// The field's mean over vertex `v`, when a field is used.
