@@ -396,11 +396,11 @@ mod tests {
     use super::*;
     use crate::engine::superpixels::Superpixels;
 
-    /// The walks from seed `seed` on a dark line along the middle of a 200x60 grey
-    /// photo cut into 20 px superpixels (ids 0-9 the top row, 10-19 the line, 20-29 the
-    /// bottom row), where the field shows cable on the line's first three and last three
-    /// superpixels only (a painted line or a shadow joins two cables), under `params`:
-    /// the vertices each visits.
+    /// The walks from the end of a cable on a dark line along the middle of a 200x60
+    /// grey photo cut into 20 px superpixels (ids 0-9 the top row, 10-19 the line, 20-29
+    /// the bottom row), where the field shows cable on the line's first three and last
+    /// three superpixels only (a painted line or a shadow joins two cables), under
+    /// `params`: the vertices each visits.
     fn walks_along_a_line_the_field_breaks(params: &Params) -> Vec<Vec<u32>> {
         let (w, h) = (200usize, 60usize);
         let labels: Vec<u32> = (0..w * h)
