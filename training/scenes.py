@@ -279,13 +279,11 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
     dl, da, db = ImageDraw.Draw(layer), ImageDraw.Draw(alpha), ImageDraw.Draw(body)
     pts = [tuple(p) for p in path * ss]
     wpx = width * ss
-    dl.line(pts, fill=tuple(int(v) for v in rim), width=max(1, round(wpx)))
-    dl.line(pts, fill=tuple(int(v) for v in colour), width=max(1, round(wpx * 0.7)))
+    rimmed_stroke(dl, da, pts, colour, rim, wpx)
     if rng.random() < 0.7:
         off = wpx * 0.15
         dl.line([(x - off, y - off) for x, y in pts], fill=tuple(int(v) for v in light),
                 width=max(1, round(wpx * 0.2)))
-    da.line(pts, fill=255, width=max(1, round(wpx)))
     db.line(pts, fill=255, width=max(1, round(wpx)))
     ends = []
     heads = ((path[0], path[min(3, len(path) - 1)]), (path[-1], path[max(-4, -len(path))]))
@@ -331,10 +329,16 @@ def draw_sleeve(dl: ImageDraw.ImageDraw, da: ImageDraw.ImageDraw, path: np.ndarr
         collar = [tuple(pts[0] * ss), tuple(pts[1] * ss)]
     colour = random_colour(rng)
     sw = wpx * rng.uniform(1.0, 1.6)
-    rim = tuple(int(v) for v in colour * rng.uniform(0.3, 0.7))
-    dl.line(collar, fill=rim, width=max(1, round(sw)))
-    dl.line(collar, fill=tuple(int(v) for v in colour), width=max(1, round(sw * 0.7)))
-    da.line(collar, fill=255, width=max(1, round(sw)))
+    rimmed_stroke(dl, da, collar, colour, colour * rng.uniform(0.3, 0.7), sw)
+
+
+def rimmed_stroke(dl: ImageDraw.ImageDraw, da: ImageDraw.ImageDraw, pts: list, colour,
+                  rim, width: float):
+    """A stroke `width` px wide along `pts` on layer `dl`: `rim` at full width with
+    `colour` over its middle 70 %, and the full width on alpha `da`."""
+    dl.line(pts, fill=tuple(int(v) for v in rim), width=max(1, round(width)))
+    dl.line(pts, fill=tuple(int(v) for v in colour), width=max(1, round(width * 0.7)))
+    da.line(pts, fill=255, width=max(1, round(width)))
 
 
 def near_colour(rng: random.Random, colour: np.ndarray) -> np.ndarray:
