@@ -164,7 +164,7 @@ impl Pass {
         let t = Instant::now();
         // An enlarged photo reaches the network from its own pixels: enlarging it and
         // shrinking it again into the network's input blurs what the network sees.
-        let source = if frame.scale() > 1.0 { photo } else { &image };
+        let source = if frame.enlarges() { photo } else { &image };
         let seen = job
             .network
             .map(|n| n.detect_as(source, frame.working))

@@ -88,6 +88,11 @@ impl WorkingFrame {
         self.photo == self.working
     }
 
+    /// True when the working image is the photo enlarged.
+    pub fn enlarges(&self) -> bool {
+        self.working[0] > self.photo[0]
+    }
+
     /// A photo point (pixel centres at integers) in working pixels, kept inside the image.
     pub fn working_point(&self, p: [f64; 2]) -> [f64; 2] {
         let f = self.factors();
@@ -117,7 +122,7 @@ impl WorkingFrame {
         } else if 2 * w <= self.photo[0] && 2 * h <= self.photo[1] {
             Cow::Owned(box_shrink(photo, w, h))
         } else {
-            let filter = if w > self.photo[0] {
+            let filter = if self.enlarges() {
                 imageops::FilterType::CatmullRom
             } else {
                 imageops::FilterType::Triangle
@@ -226,6 +231,8 @@ mod tests {
         assert_eq!(portrait.working, [416, 739]);
         // Small photos are enlarged, at most max_upscale times.
         assert_eq!(WorkingFrame::choose(320, 240, &p).working, [640, 480]);
+        assert!(WorkingFrame::choose(320, 240, &p).enlarges());
+        assert!(!big.enlarges() && !vga.enlarges());
         assert_eq!(WorkingFrame::choose(100, 100, &p).working, [200, 200]);
         assert_eq!(WorkingFrame::choose(10, 10, &p).working, [20, 20]);
     }
