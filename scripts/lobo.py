@@ -42,12 +42,13 @@ def main():
     ap.add_argument("--binary", default="target/release/ariadne")
     ap.add_argument("--models", default="out/field-{group}.onnx")
     ap.add_argument("--options", default=None)
+    ap.add_argument("--exposure", default="1", help="ariadne eval --exposure (darker photos)")
     ap.add_argument("--groups", default=",".join(GROUPS), help="comma-separated subset")
     args = ap.parse_args()
     rows = {}
     for group in args.groups.split(","):
         cmd = [args.binary, "eval", "--json", "--endpoints", args.endpoints,
-               "--model", args.models.format(group=group)]
+               "--model", args.models.format(group=group), "--exposure", args.exposure]
         if args.options:
             cmd += ["--options", args.options]
         doc = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)

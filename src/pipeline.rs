@@ -1,6 +1,6 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
 //! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
-//! resample to the working size → network (ends and cable field) → engine → cables back
+//! resample to the working size, a dim photo brightened → network (ends and cable field) → engine → cables back
 //! in the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
 //! [`Timings`].
 //!
@@ -15,7 +15,8 @@ use thiserror::Error;
 use crate::decode::{self, DecodeError};
 use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{
-    self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, render,
+    self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, exposure,
+    render,
 };
 use crate::timings::{Timings, ms_since as ms};
 
@@ -159,12 +160,23 @@ struct Pass {
 impl Pass {
     fn run(job: &Job<'_>, photo: &RgbImage, frame: WorkingFrame) -> Result<Self, PipelineError> {
         let t = Instant::now();
-        let image = frame.resample(photo);
+        let resampled = frame.resample(photo);
+        // A dim photo is brightened, by one gain for the network's source and the
+        // engine's image (README, "Any camera").
+        let params = frame.params(job.params);
+        let gain = exposure::gain(&resampled, params.exposure_level, params.exposure_max_gain);
+        let image = exposure::apply(&resampled, gain);
         let resample_ms = ms(t);
         let t = Instant::now();
         // An enlarged photo reaches the network from its own pixels: enlarging it and
         // shrinking it again into the network's input blurs what the network sees.
-        let source = if frame.enlarges() { photo } else { &image };
+        let lit_photo;
+        let source: &RgbImage = if frame.enlarges() {
+            lit_photo = exposure::apply(photo, gain);
+            &lit_photo
+        } else {
+            &image
+        };
         let seen = job
             .network
             .map(|n| n.detect_as(source, frame.working))
@@ -186,7 +198,7 @@ impl Pass {
             &ends.points,
             &ends.confidences,
             field,
-            &frame.params(job.params),
+            &params,
             job.deadline,
         )?
         .into_photo(&frame);

@@ -123,14 +123,43 @@ fn a_small_photo_shown_as_a_larger_frame_is_seen_from_its_own_pixels() {
 fn the_network_segments_the_development_split() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)
         .expect("bundled model (run `make setup`)");
-    let (simple_iou, hard_iou) = common::split_iou(Some(&network), eval::EndsFrom::Network);
+    let (simple_iou, hard_iou) = common::split_iou(
+        Some(&network),
+        eval::EndsFrom::Network,
+        eval::Camera::default(),
+    );
     eprintln!("photo alone, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= PHOTO_ALONE.0, "simple {simple_iou:.3}");
     assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
-    let (simple_iou, hard_iou) = common::split_iou(Some(&network), eval::EndsFrom::Truth);
+    let (simple_iou, hard_iou) = common::split_iou(
+        Some(&network),
+        eval::EndsFrom::Truth,
+        eval::Camera::default(),
+    );
     eprintln!("true ends and field, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
     assert!(simple_iou >= TRUE_ENDS.0, "simple {simple_iou:.3}");
     assert!(hard_iou >= TRUE_ENDS.1, "hard {hard_iou:.3}");
+}
+
+/// An underexposed photo (every value multiplied by 0.3: a dim cell, a short exposure)
+/// is brightened before the network and the engine see it, so it is segmented about as
+/// well as the photo itself: measured 0.697 / 0.637 from a photo alone, against 0.702 /
+/// 0.645 for the photos as they are and 0.557 / 0.371 with the correction off
+/// (`exposure_max_gain` 1). The floors are those of the photos as they are.
+#[test]
+fn an_underexposed_photo_is_segmented_like_a_well_exposed_one() {
+    let network = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
+    let dim = eval::Camera {
+        exposure: 0.3,
+        ..eval::Camera::default()
+    };
+    let (simple_iou, hard_iou) = common::split_iou(Some(&network), eval::EndsFrom::Network, dim);
+    eprintln!(
+        "exposure 0.3, photo alone, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}"
+    );
+    assert!(simple_iou >= PHOTO_ALONE.0, "simple {simple_iou:.3}");
+    assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
 }
 
 /// A development photo, as an absolute path.

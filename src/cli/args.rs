@@ -233,6 +233,10 @@ pub struct EvalArgs {
     /// terminals.
     #[arg(long, default_value_t = 1.0)]
     pub zoom: f64,
+    /// Darken every photo: its pixel values multiplied by this factor (an underexposed
+    /// photo), in (0, 1].
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f64,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

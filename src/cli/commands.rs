@@ -105,6 +105,12 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             args.zoom
         )));
     }
+    if !(args.exposure > 0.0 && args.exposure <= 1.0) {
+        return Err(CliError::BadOptions(format!(
+            "--exposure {}: expected a factor in (0, 1]",
+            args.exposure
+        )));
+    }
     let mut images = Vec::new();
     let mut scales = Vec::new();
     for &scale in &args.scale {
@@ -119,6 +125,7 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             camera: eval::Camera {
                 scale,
                 zoom: args.zoom,
+                exposure: args.exposure,
             },
         };
         let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;

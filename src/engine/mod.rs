@@ -7,7 +7,7 @@
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view, and
-//! [`geometry`] holds the plane geometry they share; [`field`] reads a network's cable
+//! [`geometry`] holds the plane geometry they share, [`exposure`] brightens a dim photo; [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
 //! stops walks that leave the cables, seeds cables at the border and scores each
 //! cable. [`segment`] runs them in order.
@@ -18,6 +18,7 @@ pub mod color;
 pub mod connectivity;
 mod deadline;
 mod error;
+pub mod exposure;
 pub mod field;
 pub mod geometry;
 pub mod graph;

@@ -31,6 +31,8 @@ pub struct ImageResult {
     pub scale: f64,
     /// Magnification of the photo (its centre cropped and enlarged).
     pub zoom: f64,
+    /// Factor the photo's pixel values were multiplied by.
+    pub exposure: f64,
     /// Cables in the ground truth.
     pub gt_cables: usize,
     /// Cables found.
@@ -112,6 +114,7 @@ pub fn evaluate_sample(
         name: sample.name.clone(),
         scale: setup.camera.scale,
         zoom: setup.camera.zoom,
+        exposure: setup.camera.exposure,
         gt_cables: view.cable_masks.len(),
         found_cables: seg.cables.len(),
         matched_cables,

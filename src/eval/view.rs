@@ -1,6 +1,7 @@
 //! A sample as another camera would see it: of another resolution (the photo, its
 //! masks and its terminals resized together) or closer (the centre of the frame
-//! cropped and enlarged back to the frame's size, so cables look wider).
+//! cropped and enlarged back to the frame's size, so cables look wider), or darker (an
+//! underexposed photo).
 
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
@@ -15,6 +16,9 @@ pub struct Camera {
     /// Magnification: the central 1/zoom of the frame, each way, is kept (a camera
     /// closer to the table); 1 keeps the whole frame.
     pub zoom: f64,
+    /// Factor every pixel value is multiplied by: below 1 an underexposed photo (a dim
+    /// cell, a short exposure); 1 keeps the photo's brightness.
+    pub exposure: f64,
 }
 
 impl Default for Camera {
@@ -22,6 +26,7 @@ impl Default for Camera {
         Self {
             scale: 1.0,
             zoom: 1.0,
+            exposure: 1.0,
         }
     }
 }
@@ -44,7 +49,8 @@ pub struct View {
 impl View {
     /// `sample` as `camera` sees it (the default camera: as it is, bytes untouched).
     /// The photo is enlarged with Catmull-Rom (sharp, as a finer sensor would see it)
-    /// and shrunk with a triangle filter (averaging, as a coarser one would); masks are
+    /// and shrunk with a triangle filter (averaging, as a coarser one would), then its
+    /// values are multiplied by the exposure factor; masks are
     /// resampled with a triangle filter and thresholded at half; a cable whose mask
     /// leaves the view is dropped from the truth.
     pub fn of(sample: &Sample, camera: Camera) -> Result<Self, DatasetError> {
@@ -80,7 +86,12 @@ impl View {
         } else {
             imageops::FilterType::Triangle
         };
-        let resized = imageops::resize(&photo, size.0, size.1, filter);
+        let mut resized = imageops::resize(&photo, size.0, size.1, filter);
+        if camera.exposure != 1.0 {
+            for v in resized.iter_mut() {
+                *v = (f64::from(*v) * camera.exposure).round().min(255.0) as u8;
+            }
+        }
         let mut png = std::io::Cursor::new(Vec::new());
         resized
             .write_to(&mut png, ImageFormat::Png)

@@ -9,8 +9,13 @@ use ariadne_dlo::engine::Params;
 use ariadne_dlo::eval;
 
 /// Weighted IoU of `simple` (preset `default`) and `hard` (preset `clutter`) on the
-/// development split, with ends from `ends` and the cable field of `network` when given.
-pub fn split_iou(network: Option<&dyn EndpointDetector>, ends: eval::EndsFrom) -> (f64, f64) {
+/// development split as `camera` sees it, with ends from `ends` and the cable field of
+/// `network` when given.
+pub fn split_iou(
+    network: Option<&dyn EndpointDetector>,
+    ends: eval::EndsFrom,
+    camera: eval::Camera,
+) -> (f64, f64) {
     let samples = eval::load_dataset(&eval::default_dataset_dir())
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
     let simple = Params::preset("default").unwrap();
@@ -18,7 +23,7 @@ pub fn split_iou(network: Option<&dyn EndpointDetector>, ends: eval::EndsFrom) -
     let setup = eval::Setup {
         network,
         ends,
-        camera: eval::Camera::default(),
+        camera,
     };
     let results = eval::evaluate_all(&samples, &simple, &hard, setup, |_| {}).unwrap();
     (

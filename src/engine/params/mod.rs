@@ -31,6 +31,12 @@ pub struct Params {
     /// Fragments smaller than this fraction of the nominal superpixel area are merged
     /// into a neighbour when connectivity is enforced.
     pub min_size_factor: f32,
+    /// Brightness (0..=255) the photo's bright end (the brightest channel at the
+    /// 99.5th percentile) is brought up to before anything reads its colours, so an
+    /// underexposed photo is seen as a well-exposed one (`exposure`).
+    pub exposure_level: f32,
+    /// Largest gain applied for that; 1 leaves every photo as it is.
+    pub exposure_max_gain: f32,
 
     // --- working resolution (see `scale`) ---
     /// Pixels of the image the engine works on: photos of another size are resampled
@@ -248,6 +254,8 @@ impl Default for Params {
             sigma: 1.0,
             slic_iterations: 10,
             min_size_factor: 0.25,
+            exposure_level: 230.0,
+            exposure_max_gain: 4.0,
             working_pixels: 307_200,
             max_upscale: 2.0,
             nominal_width_px: 8.5,
@@ -361,6 +369,7 @@ impl Params {
             refine: false,
             mask_width_px: 0.0,
             seed_region_steps: 0.0,
+            exposure_max_gain: 1.0,
             ..Self::default()
         }
     }
