@@ -198,7 +198,7 @@ fn read_profile(
     let start = (0..=search)
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;
-    let (lo, hi) = run_around(&m, start)?;
+    let (lo, hi) = across_highlights(profile, &m, &fg, run_around(&m, start)?, min_de);
     let across = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
     Some(Reading {
         plain: across(without_shadowed_flanks(
@@ -286,6 +286,54 @@ fn run_around(m: &[f32], start: usize) -> Option<(usize, usize)> {
         hi += 1;
     }
     (lo > 0 && hi < m.len() - 1).then_some((lo, hi))
+}
+
+/// The run `lo..=hi` of positive margins `m` joined with a run beside it across a gap
+/// no wider than the run that is a highlight: lighter than the run (mean lightness) but
+/// not background (every sample at least `min_de` from it by `fg`), when the run beyond
+/// has the run's colour (mean Lab within `2 min_de`). A glossy cable's
+/// highlight, or a dark cable's lighter core, can fall below the half maximum and split
+/// the cable in two halves, either of which alone would put the centre on one side.
+/// The gap between two cables, or between a cable and its shadow, is background, a
+/// darker cable crossing is no highlight, and a cable of another colour beside it is
+/// not its other half: they stay apart.
+fn across_highlights(
+    profile: &[[f32; 3]],
+    m: &[f32],
+    fg: &[f32],
+    (mut lo, mut hi): (usize, usize),
+    min_de: f32,
+) -> (usize, usize) {
+    let mean = |a: usize, b: usize| {
+        let n = (b - a + 1) as f32;
+        profile[a..=b].iter().fold([0.0f32; 3], |acc, s| {
+            [acc[0] + s[0] / n, acc[1] + s[1] / n, acc[2] + s[2] / n]
+        })
+    };
+    loop {
+        let colour = mean(lo, hi);
+        let highlight = |j: usize| m[j] <= 0.0 && fg[j] >= min_de && profile[j][0] > colour[0];
+        // The run past the gap on either side, when the gap is a highlight no wider than
+        // the run and the run beyond has the run's colour (the cable's other half).
+        let width = hi - lo + 1;
+        let same_cable = |(a, b): (usize, usize)| dist3(mean(a, b), colour) < 2.0 * min_de;
+        let left = (lo.saturating_sub(width + 1)..lo)
+            .rev()
+            .find(|&j| !highlight(j))
+            .filter(|&j| j + 1 < lo && m[j] > 0.0)
+            .and_then(|j| run_around(m, j))
+            .filter(|&run| same_cable(run));
+        let right = (hi + 1..(hi + width + 2).min(m.len()))
+            .find(|&j| !highlight(j))
+            .filter(|&j| j > hi + 1 && m[j] > 0.0)
+            .and_then(|j| run_around(m, j))
+            .filter(|&run| same_cable(run));
+        if left.is_none() && right.is_none() {
+            return (lo, hi);
+        }
+        lo = left.map_or(lo, |run| run.0);
+        hi = right.map_or(hi, |run| run.1);
+    }
 }
 
 /// A cast shadow differs from the background it falls on by lightness far more than by
@@ -454,6 +502,25 @@ mod tests {
             (lo.min(p[1]), hi.max(p[1]))
         });
         assert!(lo > above && hi < below, "rows {lo}..{hi}");
+    }
+
+    #[test]
+    fn a_dark_glossy_cable_is_not_split_by_its_highlight() {
+        // A dark cable (rows 16-26, centre 21) with a dark rim and a lighter highlight
+        // along its middle (rows 20-22), still darker than the table: the highlight
+        // falls below the half maximum, and a line started on the upper half moves to
+        // the middle of the whole cable, which is read whole.
+        let lab = table(&[
+            (16, 16, [10, 10, 12]),
+            (17, 19, [40, 40, 45]),
+            (20, 22, [150, 150, 155]),
+            (23, 25, [40, 40, 45]),
+            (26, 26, [10, 10, 12]),
+        ]);
+        assert_refined_between(&lab, 18.0, 20.5, 21.5);
+        let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, 18.0]).collect();
+        let width = refine(&line, &lab, &Params::default()).width_px.unwrap();
+        assert!((10.0..12.0).contains(&width), "{width}");
     }
 
     #[test]
