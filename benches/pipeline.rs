@@ -11,7 +11,7 @@ use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
-use ariadne_dlo::engine::{self, MaskKind, Params, render};
+use ariadne_dlo::engine::{self, MaskKind, Params, exposure, render};
 use ariadne_dlo::pipeline;
 use ariadne_dlo::{decode, eval};
 
@@ -171,6 +171,21 @@ fn settings(p: &Params) -> SlicSettings {
 fn decode_jpeg_640x480(bencher: divan::Bencher) {
     let fx = fixtures();
     bencher.bench_local(|| decode::decode_rgb(&fx[0].jpeg, u64::MAX).unwrap());
+}
+
+/// The exposure correction of a dim photo (values times 0.3): the gain read from the
+/// photo and applied (a well-exposed photo pays the reading alone).
+#[divan::bench(sample_count = 30)]
+fn exposure_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let mut dim = fx[0].image.clone();
+    dim.iter_mut()
+        .for_each(|v| *v = (f32::from(*v) * 0.3) as u8);
+    bencher.bench_local(|| {
+        let gain = exposure::gain(&dim, p.exposure_level, p.exposure_max_gain);
+        exposure::apply(&dim, gain).into_owned()
+    });
 }
 
 /// Lab conversion, blur and SLIC.
