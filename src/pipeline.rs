@@ -1,8 +1,8 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
 //! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
-//! resample to the working size, a dim photo brightened → network (ends and cable field) → engine → cables back
-//! in the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
-//! [`Timings`].
+//! resample to the working size, a dim photo brightened → network (ends and cable
+//! field) → engine → cables back in the photo's pixels → masks at the photo's size →
+//! PNG, timed stage by stage in one [`Timings`].
 //!
 //! The network runs whenever there is one, also when the caller gives the ends: then
 //! its ends are ignored but its cable field still guides the walks.

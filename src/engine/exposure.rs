@@ -1,4 +1,4 @@
-//! Exposure: a dim photo is brightened before the engine reads its colours.
+//! Exposure: a dim photo is brightened before the network and the engine read it.
 //!
 //! SLIC's colour distance, the histograms' saturation and value bins and the lateral
 //! contrast are all absolute: in an underexposed photo (a dark cell, a black
