@@ -6,8 +6,9 @@
 //! every end) → [`pairing`] (global choice of walks) → [`spline`] (B-spline fit) →
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
-//! models one cable from its walk, [`border`] finds cables with no end in view, and
-//! [`geometry`] holds the plane geometry they share, [`exposure`] brightens a dim photo; [`field`] reads a network's cable
+//! models one cable from its walk, [`border`] finds cables with no end in view,
+//! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
+//! photo (the pipeline calls it); [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
 //! stops walks that leave the cables, seeds cables at the border and scores each
 //! cable. [`segment`] runs them in order.
