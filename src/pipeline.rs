@@ -1,11 +1,15 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
 //! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
 //! resample to the working size, a dim photo brightened → network (ends and cable
-//! field) → engine → cables back in the photo's pixels → masks at the photo's size →
-//! PNG, timed stage by stage in one [`Timings`].
+//! field) beside the engine's superpixels → the rest of the engine → cables back in
+//! the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
+//! [`Timings`].
 //!
 //! The network runs whenever there is one, also when the caller gives the ends: then
-//! its ends are ignored but its cable field still guides the walks.
+//! its ends are ignored but its cable field still guides the walks. It needs no
+//! superpixels and SLIC needs no network, so it runs on a second (scoped) thread
+//! while SLIC runs on the worker's: a request uses at most two threads, and a lone
+//! request on an idle machine is answered sooner (README, "Performance").
 
 use std::time::Instant;
 
@@ -167,7 +171,6 @@ impl Pass {
         let gain = exposure::gain(&resampled, params.exposure_level, params.exposure_max_gain);
         let image = exposure::apply(&resampled, gain);
         let resample_ms = ms(t);
-        let t = Instant::now();
         // An enlarged photo reaches the network from its own pixels: enlarging it and
         // shrinking it again into the network's input blurs what the network sees.
         let lit_photo;
@@ -177,11 +180,26 @@ impl Pass {
         } else {
             &image
         };
-        let seen = job
-            .network
-            .map(|n| n.detect_as(source, frame.working))
-            .transpose()?;
-        let network_ms = if seen.is_some() { ms(t) } else { 0.0 };
+        // The network on a second thread while SLIC runs here (module docs).
+        let (seen, over) = std::thread::scope(|scope| {
+            let network = job.network.map(|n| {
+                scope.spawn(move || {
+                    let t = Instant::now();
+                    n.detect_as(source, frame.working).map(|seen| (seen, ms(t)))
+                })
+            });
+            let over = engine::oversegment(&image, &params, job.deadline);
+            let seen = network.map(|thread| match thread.join() {
+                Ok(result) => result,
+                Err(panic) => std::panic::resume_unwind(panic),
+            });
+            (seen, over)
+        });
+        let (seen, network_ms) = match seen.transpose()? {
+            Some((seen, network_ms)) => (Some(seen), network_ms),
+            None => (None, 0.0),
+        };
+        let over = over?;
         let ends = match (job.ends, &seen) {
             (Some(points), _) => Ends::given(
                 &points
@@ -193,8 +211,9 @@ impl Pass {
             (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
         };
         let field = seen.as_ref().and_then(|s| s.field.as_ref());
-        let segmentation = engine::segment_with_confidence(
+        let segmentation = engine::segment_oversegmented(
             &image,
+            over,
             &ends.points,
             &ends.confidences,
             field,

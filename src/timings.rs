@@ -13,7 +13,8 @@ pub struct Timings {
     pub queue: f64,
     /// Image decoding, EXIF orientation and resampling to the working size.
     pub decode: f64,
-    /// Endpoint detection (0 when ends were given).
+    /// The network: endpoint detection and cable field (0 when none is loaded). It runs
+    /// on a second thread while `superpixels` runs, so the stages overlap in `total`.
     pub endpoints: f64,
     /// Colour conversion, blur and SLIC.
     pub superpixels: f64,

@@ -49,7 +49,7 @@ use crate::timings::{Timings, ms_since as ms};
 use cable::Scene;
 use color::LabImage;
 use graph::Graph;
-use superpixels::SlicSettings;
+use superpixels::{SlicSettings, Superpixels};
 use walk::{Seed, Terrain};
 
 /// Smallest image side the engine accepts, pixels.
@@ -128,13 +128,29 @@ pub fn segment_with_confidence(
     params: &Params,
     deadline: Deadline,
 ) -> Result<Segmentation, EngineError> {
+    let over = oversegment(image, params, deadline)?;
+    segment_oversegmented(image, over, ends, confidence, field, params, deadline)
+}
+
+/// The photo's blurred Lab image and its superpixels: the first stage of
+/// [`segment_with_confidence`], which needs neither the ends nor the field (a caller
+/// may run the network meanwhile).
+#[derive(Debug)]
+pub struct Oversegmented {
+    lab: LabImage,
+    sp: Superpixels,
+    /// Time taken, milliseconds.
+    ms: f64,
+}
+
+/// Converts `image` to Lab, blurs it and runs SLIC (after checking the parameters and
+/// the image's size), giving up between SLIC iterations once `deadline` has passed.
+pub fn oversegment(
+    image: &RgbImage,
+    params: &Params,
+    deadline: Deadline,
+) -> Result<Oversegmented, EngineError> {
     params.validate()?;
-    if confidence.len() != ends.len() {
-        return Err(EngineError::BadConfidences {
-            ends: ends.len(),
-            confidences: confidence.len(),
-        });
-    }
     let (width, height) = image.dimensions();
     if width < MIN_SIDE || height < MIN_SIDE {
         return Err(EngineError::ImageTooSmall {
@@ -143,12 +159,8 @@ pub fn segment_with_confidence(
             min: MIN_SIDE,
         });
     }
-    validate_ends(ends, width, height)?;
-    let mut timings = Timings::default();
-
     let t = Instant::now();
-    let rgb = image.as_raw();
-    let mut lab = LabImage::from_rgb(rgb, width as usize, height as usize);
+    let mut lab = LabImage::from_rgb(image.as_raw(), width as usize, height as usize);
     lab.gaussian_blur(params.sigma);
     let settings = SlicSettings {
         n_segments: params.n_segments,
@@ -157,7 +169,38 @@ pub fn segment_with_confidence(
         min_size_factor: params.min_size_factor,
     };
     let sp = superpixels::slic_until(&lab, &settings, deadline)?;
-    timings.superpixels = ms(t);
+    Ok(Oversegmented { lab, sp, ms: ms(t) })
+}
+
+/// The rest of [`segment_with_confidence`]: graph, walks, pairing and cables on
+/// `image` oversegmented by [`oversegment`] with the same `params`.
+pub fn segment_oversegmented(
+    image: &RgbImage,
+    over: Oversegmented,
+    ends: &[[f64; 2]],
+    confidence: &[f32],
+    field: Option<&CableField>,
+    params: &Params,
+    deadline: Deadline,
+) -> Result<Segmentation, EngineError> {
+    if confidence.len() != ends.len() {
+        return Err(EngineError::BadConfidences {
+            ends: ends.len(),
+            confidences: confidence.len(),
+        });
+    }
+    let (width, height) = image.dimensions();
+    validate_ends(ends, width, height)?;
+    let Oversegmented {
+        lab,
+        sp,
+        ms: oversegment_ms,
+    } = over;
+    let mut timings = Timings {
+        superpixels: oversegment_ms,
+        ..Timings::default()
+    };
+    let rgb = image.as_raw();
     deadline.check()?;
 
     let t = Instant::now();
