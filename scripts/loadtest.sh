@@ -23,6 +23,10 @@ done
 photos=("$DATASET"/simple/*.jpg)
 echo "photos: ${#photos[@]} from $DATASET/simple; ${DURATION} s per level; $(nproc) CPUs"
 for c in 1 4 16; do
+  # wrk ends a level by closing its connections with requests still in flight; those
+  # jobs run on (a slot is held until the work really ends), so let them drain before
+  # the next level's clients arrive, or its first requests meet a full queue (429).
+  sleep 2
   echo "== concurrency $c"
   wrk -t1 -c"$c" -d"${DURATION}s" --timeout 30s -s scripts/loadtest.lua \
     "http://127.0.0.1:${PORT}" -- "${photos[@]}" | grep -E "statuses|summary|Non-2xx|Socket errors"

@@ -8,7 +8,9 @@ mod common;
 use std::process::Command;
 
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, Ends, OnnxDetector};
+use ariadne_dlo::engine::{self, Deadline, MaskKind, Params};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
+use ariadne_dlo::pipeline;
 use image::imageops::FilterType;
 
 /// Weighted IoU floors (simple, hard) with a photo alone: measured 0.702 and 0.645
@@ -160,6 +162,47 @@ fn an_underexposed_photo_is_segmented_like_a_well_exposed_one() {
     );
     assert!(simple_iou >= PHOTO_ALONE.0, "simple {simple_iou:.3}");
     assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
+}
+
+/// The pipeline runs the network on a second thread while SLIC runs: its cables are
+/// exactly those of the engine run after the network, on the network's ends and field
+/// (a 640x480 development photo is its own working image, and bright enough to need no
+/// exposure gain).
+#[test]
+fn the_network_beside_slic_gives_the_sequential_result() {
+    let network = OnnxDetector::load(&DetectorConfig::default(), 1)
+        .expect("bundled model (run `make setup`)");
+    let bytes = std::fs::read(dataset_photo()).unwrap();
+    let params = Params::default();
+    let out = pipeline::run(&pipeline::Job {
+        bytes: &bytes,
+        ends: None,
+        network: Some(&network),
+        params: &params,
+        max_pixels: u64::MAX,
+        mask: MaskKind::Binary,
+        overlay: false,
+        encode: false,
+        deadline: Deadline::NONE,
+    })
+    .unwrap();
+    let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
+    let seen = network
+        .detect_as(&image, [image.width(), image.height()])
+        .unwrap();
+    let ends = Ends::detected(&seen.ends);
+    let sequential = engine::segment_with_confidence(
+        &image,
+        &ends.points,
+        &ends.confidences,
+        seen.field.as_ref(),
+        &params,
+        Deadline::NONE,
+    )
+    .unwrap();
+    assert!(!sequential.cables.is_empty());
+    assert_eq!(out.ends.points, ends.points);
+    assert_eq!(out.segmentation.cables, sequential.cables);
 }
 
 /// A development photo, as an absolute path.
