@@ -133,6 +133,7 @@ fn service_path(
         overlay: false,
         encode: true,
         deadline: ariadne_dlo::engine::Deadline::NONE,
+        overlap: true,
     })
     .unwrap()
 }

@@ -7,9 +7,10 @@
 //!
 //! The network runs whenever there is one, also when the caller gives the ends: then
 //! its ends are ignored but its cable field still guides the walks. It needs no
-//! superpixels and SLIC needs no network, so it runs on a second (scoped) thread
-//! while SLIC runs on the worker's: a request uses at most two threads, and a lone
-//! request on an idle machine is answered sooner (README, "Performance").
+//! superpixels and SLIC needs no network, so with [`Job::overlap`] it runs on a second
+//! (scoped) thread while SLIC runs on the caller's: a request uses at most two
+//! threads, and a lone request on an idle machine is answered sooner (README,
+//! "Performance"). The results are the same either way.
 
 use std::time::Instant;
 
@@ -45,6 +46,9 @@ pub struct Job<'a> {
     pub encode: bool,
     /// When to give up (the engine checks it between its steps).
     pub deadline: Deadline,
+    /// Run the network on a second thread while SLIC runs on this one (module docs);
+    /// the service asks for it only when a CPU would otherwise idle.
+    pub overlap: bool,
 }
 
 /// A job without ends needs a network.
@@ -180,21 +184,27 @@ impl Pass {
         } else {
             &image
         };
-        // The network on a second thread while SLIC runs here (module docs).
-        let (seen, over) = std::thread::scope(|scope| {
-            let network = job.network.map(|n| {
-                scope.spawn(move || {
-                    let t = Instant::now();
-                    n.detect_as(source, frame.working).map(|seen| (seen, ms(t)))
-                })
-            });
-            let over = engine::oversegment(&image, &params, job.deadline);
-            let seen = network.map(|thread| match thread.join() {
-                Ok(result) => result,
-                Err(panic) => std::panic::resume_unwind(panic),
-            });
-            (seen, over)
-        });
+        let detect = |network: &dyn EndpointDetector| {
+            let t = Instant::now();
+            network
+                .detect_as(source, frame.working)
+                .map(|seen| (seen, ms(t)))
+        };
+        let (seen, over) = match job.network {
+            // The network on a second thread while SLIC runs here (module docs).
+            Some(network) if job.overlap => std::thread::scope(|scope| {
+                let thread = scope.spawn(move || detect(network));
+                let over = engine::oversegment(&image, &params, job.deadline);
+                match thread.join() {
+                    Ok(seen) => (Some(seen), over),
+                    Err(panic) => std::panic::resume_unwind(panic),
+                }
+            }),
+            network => (
+                network.map(detect),
+                engine::oversegment(&image, &params, job.deadline),
+            ),
+        };
         let (seen, network_ms) = match seen.transpose()? {
             Some((seen, network_ms)) => (Some(seen), network_ms),
             None => (None, 0.0),
@@ -313,6 +323,7 @@ mod tests {
             overlay: true,
             encode: true,
             deadline: Deadline::NONE,
+            overlap: false,
         })
         .unwrap();
         // The same cables as the engine on the decoded photo (PNG is lossless).

@@ -58,6 +58,7 @@ fn run_with(bytes: &[u8], ends: &[[f64; 2]], params: &Params) -> Output {
         overlay: false,
         encode: false,
         deadline: ariadne_dlo::engine::Deadline::NONE,
+        overlap: true,
     })
     .unwrap()
 }

@@ -164,34 +164,37 @@ fn an_underexposed_photo_is_segmented_like_a_well_exposed_one() {
     assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
 }
 
-/// The pipeline runs the network on a second thread while SLIC runs: its cables are
-/// exactly those of the engine run after the network, on the network's ends and field
-/// (a 640x480 development photo is its own working image, and bright enough to need no
-/// exposure gain).
+/// With `overlap` the pipeline runs the network on a second thread while SLIC runs:
+/// its cables are exactly those it finds with the two in turn, and those of the engine
+/// run after the network, on the network's ends and field (a 640x480 development photo
+/// is its own working image, and bright enough to need no exposure gain).
 #[test]
 fn the_network_beside_slic_gives_the_sequential_result() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)
         .expect("bundled model (run `make setup`)");
     let bytes = std::fs::read(dataset_photo()).unwrap();
     let params = Params::default();
-    let out = pipeline::run(&pipeline::Job {
-        bytes: &bytes,
-        ends: None,
-        network: Some(&network),
-        params: &params,
-        max_pixels: u64::MAX,
-        mask: MaskKind::Binary,
-        overlay: false,
-        encode: false,
-        deadline: Deadline::NONE,
-    })
-    .unwrap();
+    let run = |overlap| {
+        pipeline::run(&pipeline::Job {
+            bytes: &bytes,
+            ends: None,
+            network: Some(&network),
+            params: &params,
+            max_pixels: u64::MAX,
+            mask: MaskKind::Binary,
+            overlay: false,
+            encode: false,
+            deadline: Deadline::NONE,
+            overlap,
+        })
+        .unwrap()
+    };
     let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
     let seen = network
         .detect_as(&image, [image.width(), image.height()])
         .unwrap();
     let ends = Ends::detected(&seen.ends);
-    let sequential = engine::segment_with_confidence(
+    let direct = engine::segment_with_confidence(
         &image,
         &ends.points,
         &ends.confidences,
@@ -200,9 +203,12 @@ fn the_network_beside_slic_gives_the_sequential_result() {
         Deadline::NONE,
     )
     .unwrap();
-    assert!(!sequential.cables.is_empty());
-    assert_eq!(out.ends.points, ends.points);
-    assert_eq!(out.segmentation.cables, sequential.cables);
+    assert!(!direct.cables.is_empty());
+    for overlap in [true, false] {
+        let out = run(overlap);
+        assert_eq!(out.ends.points, ends.points, "overlap {overlap}");
+        assert_eq!(out.segmentation.cables, direct.cables, "overlap {overlap}");
+    }
 }
 
 /// A development photo, as an absolute path.

@@ -78,6 +78,7 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
             overlay: false,
             encode: false,
             deadline: ariadne_dlo::engine::Deadline::NONE,
+            overlap: true,
         })
         .unwrap();
         let (w, h) = scene.image.dimensions();

@@ -28,6 +28,7 @@ pub fn segment(args: SegmentArgs) -> Result<(), CliError> {
         overlay: args.overlay.is_some(),
         encode: true,
         deadline: crate::engine::Deadline::NONE,
+        overlap: true,
     })
     .map_err(|e| CliError::Image(args.image.clone(), e))?;
     if let (Some(path), Some(png)) = (&args.mask, &out.mask_png) {

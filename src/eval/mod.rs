@@ -97,6 +97,7 @@ pub fn evaluate_sample(
         overlay: false,
         encode: false,
         deadline: crate::engine::Deadline::NONE,
+        overlap: true,
     })
     .map_err(|e| DatasetError::Engine(sample.image.clone(), e.to_string()))?;
     let Mask::Gray(pred) = &out.mask else {

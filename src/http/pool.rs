@@ -46,6 +46,23 @@ pub struct PoolCounts {
     pub running: AtomicUsize,
 }
 
+/// Tells a running job whether the pool has a worker with nothing to do (see
+/// [`WorkerPool::spare_probe`]).
+#[derive(Debug, Clone)]
+pub struct SpareProbe {
+    counts: Arc<PoolCounts>,
+    workers: usize,
+}
+
+impl SpareProbe {
+    /// True when fewer jobs are running (the asking one included) than there are
+    /// workers and none is queued: a CPU the pool was sized for is free.
+    pub fn has_spare_worker(&self) -> bool {
+        self.counts.queued.load(Ordering::SeqCst) == 0
+            && self.counts.running.load(Ordering::SeqCst) < self.workers
+    }
+}
+
 /// The worker pool.
 #[derive(Debug)]
 pub struct WorkerPool {
@@ -88,6 +105,14 @@ impl WorkerPool {
     /// Live counts of queued and running jobs.
     pub fn counts(&self) -> &PoolCounts {
         &self.counts
+    }
+
+    /// A handle a job can ask, while it runs, whether a worker would otherwise idle.
+    pub fn spare_probe(&self) -> SpareProbe {
+        SpareProbe {
+            counts: Arc::clone(&self.counts),
+            workers: self.workers,
+        }
     }
 
     /// Blocks until no job is queued or running, or `timeout` has passed; true when idle.
@@ -204,5 +229,31 @@ mod tests {
             pool.try_submit(|| 9).unwrap().await.unwrap().unwrap().value,
             9
         );
+    }
+
+    /// A job alone in a two-worker pool has a spare worker beside it; the second of two
+    /// running jobs has none.
+    #[test]
+    fn a_job_learns_whether_a_worker_is_spare() {
+        let pool = WorkerPool::new(2, 4).unwrap();
+        let (seen_tx, seen_rx) = std::sync::mpsc::channel();
+        let mut releases = Vec::new();
+        for _ in 0..2 {
+            let (release_tx, release_rx) = std::sync::mpsc::channel::<()>();
+            let (probe, seen_tx) = (pool.spare_probe(), seen_tx.clone());
+            drop(pool.try_submit(move || {
+                seen_tx.send(probe.has_spare_worker()).unwrap();
+                release_rx.recv().unwrap();
+            }));
+            // Each job has started (and holds its worker) before the next is submitted.
+            let seen = seen_rx.recv_timeout(Duration::from_secs(10)).unwrap();
+            releases.push((seen, release_tx));
+        }
+        let seen: Vec<bool> = releases.iter().map(|(seen, _)| *seen).collect();
+        assert_eq!(seen, [true, false]);
+        for (_, release) in releases {
+            release.send(()).unwrap();
+        }
+        assert!(pool.wait_idle(Duration::from_secs(10)));
     }
 }

@@ -163,6 +163,7 @@ pub async fn segment(
     )?;
     let span = tracing::Span::current();
     let stopping = state.giving_up.subscribe();
+    let spare = state.pool.spare_probe();
     let receiver = state
         .pool
         .try_submit(move || {
@@ -176,7 +177,9 @@ pub async fn segment(
                 // Nobody is waiting for this answer any more: skip the work.
                 return Err(ApiError::DeadlineExceeded { deadline_ms });
             }
-            run_job(job)
+            // The network beside SLIC only when a worker would otherwise idle: under
+            // load every CPU already has a request of its own.
+            run_job(job, spare.has_spare_worker())
         })
         .map_err(|_| {
             metrics::reject("queue_full");
@@ -356,8 +359,9 @@ fn parse(
     })
 }
 
-/// The CPU part of a request, on a worker: the pipeline, its stages recorded.
-fn run_job(job: Job) -> Result<Output, ApiError> {
+/// The CPU part of a request, on a worker: the pipeline (with `overlap`, the network
+/// on a second thread beside SLIC), its stages recorded.
+fn run_job(job: Job, overlap: bool) -> Result<Output, ApiError> {
     let json = job.format == ResponseFormat::Json;
     let out = pipeline::run(&pipeline::Job {
         bytes: &job.image,
@@ -369,6 +373,7 @@ fn run_job(job: Job) -> Result<Output, ApiError> {
         overlay: job.overlay && json,
         encode: true,
         deadline: Deadline(Some(job.deadline.0)),
+        overlap,
     })
     .map_err(|e| match e {
         PipelineError::Engine(EngineError::DeadlineExceeded) => ApiError::DeadlineExceeded {
