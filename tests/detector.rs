@@ -8,9 +8,8 @@ mod common;
 use std::process::Command;
 
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, Ends, OnnxDetector};
-use ariadne_dlo::engine::{self, Deadline, MaskKind, Params};
+use ariadne_dlo::engine::{self, Deadline, Params};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
-use ariadne_dlo::pipeline;
 use image::imageops::FilterType;
 
 /// Weighted IoU floors (simple, hard) with a photo alone: measured 0.702 and 0.645
@@ -174,21 +173,6 @@ fn the_network_beside_slic_gives_the_sequential_result() {
         .expect("bundled model (run `make setup`)");
     let bytes = std::fs::read(dataset_photo()).unwrap();
     let params = Params::default();
-    let run = |overlap| {
-        pipeline::run(&pipeline::Job {
-            bytes: &bytes,
-            ends: None,
-            network: Some(&network),
-            params: &params,
-            max_pixels: u64::MAX,
-            mask: MaskKind::Binary,
-            overlay: false,
-            encode: false,
-            deadline: Deadline::NONE,
-            overlap,
-        })
-        .unwrap()
-    };
     let image = ariadne_dlo::decode::decode_rgb(&bytes, u64::MAX).unwrap();
     let seen = network
         .detect_as(&image, [image.width(), image.height()])
@@ -205,7 +189,7 @@ fn the_network_beside_slic_gives_the_sequential_result() {
     .unwrap();
     assert!(!direct.cables.is_empty());
     for overlap in [true, false] {
-        let out = run(overlap);
+        let out = common::photo_alone(&bytes, &network, &params, overlap);
         assert_eq!(out.ends.points, ends.points, "overlap {overlap}");
         assert_eq!(out.segmentation.cables, direct.cables, "overlap {overlap}");
     }

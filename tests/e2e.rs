@@ -9,7 +9,7 @@ mod common;
 use std::sync::Arc;
 
 use ariadne_dlo::detect::{DetectorConfig, OnnxDetector};
-use ariadne_dlo::engine::{MaskKind, Params, render};
+use ariadne_dlo::engine::{Params, render};
 use ariadne_dlo::synth::{self, Case};
 use ariadne_dlo::{eval, pipeline};
 use common::app::TestApp;
@@ -68,19 +68,7 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
     for case in Case::ALL {
         let scene = synth::case(case);
         let png = pipeline::rgb_png(&scene.image).unwrap();
-        let out = pipeline::run(&pipeline::Job {
-            bytes: &png,
-            ends: None,
-            network: Some(&network),
-            params: &params,
-            max_pixels: u64::MAX,
-            mask: MaskKind::Binary,
-            overlay: false,
-            encode: false,
-            deadline: ariadne_dlo::engine::Deadline::NONE,
-            overlap: true,
-        })
-        .unwrap();
+        let out = common::photo_alone(&png, &network, &params, true);
         let (w, h) = scene.image.dimensions();
         let found: Vec<GrayImage> = out
             .segmentation

@@ -5,8 +5,31 @@
 pub mod app;
 
 use ariadne_dlo::detect::EndpointDetector;
-use ariadne_dlo::engine::Params;
-use ariadne_dlo::eval;
+use ariadne_dlo::engine::{Deadline, MaskKind, Params};
+use ariadne_dlo::{eval, pipeline};
+
+/// The pipeline on an image file with no given ends (the network finds them), its
+/// binary mask drawn but not encoded; `overlap` as in [`pipeline::Job::overlap`].
+pub fn photo_alone(
+    bytes: &[u8],
+    network: &dyn EndpointDetector,
+    params: &Params,
+    overlap: bool,
+) -> pipeline::Output {
+    pipeline::run(&pipeline::Job {
+        bytes,
+        ends: None,
+        network: Some(network),
+        params,
+        max_pixels: u64::MAX,
+        mask: MaskKind::Binary,
+        overlay: false,
+        encode: false,
+        deadline: Deadline::NONE,
+        overlap,
+    })
+    .expect("the pipeline runs")
+}
 
 /// Weighted IoU of `simple` (preset `default`) and `hard` (preset `clutter`) on the
 /// development split as `camera` sees it, with ends from `ends` and the cable field of
