@@ -55,6 +55,10 @@ pub struct DetectorArgs {
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
     #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = DetectorConfig::default().detect_nms_px)]
     pub detect_nms_px: f64,
+    /// With a cable-field model, drop ends with no cable probability of at least this
+    /// within two cells (0 keeps every end).
+    #[arg(long, env = "ARIADNE_DETECT_MIN_CABLE", default_value_t = DetectorConfig::default().detect_min_cable)]
+    pub detect_min_cable: f32,
     /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
     #[arg(long, env = "ARIADNE_ORT_THREADS", default_value_t = DetectorConfig::default().ort_threads)]
     pub ort_threads: usize,
@@ -73,6 +77,7 @@ impl From<DetectorArgs> for DetectorConfig {
             model_input_height: a.model_input_height,
             detect_threshold: a.detect_threshold,
             detect_nms_px: a.detect_nms_px,
+            detect_min_cable: a.detect_min_cable,
             ort_threads: a.ort_threads,
             ort_library: a.ort_library,
         }

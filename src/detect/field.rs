@@ -1,8 +1,11 @@
 //! Decoding the bundled cable-field model's output `[1, 6, H', W']` (H', W' the input
 //! over the stride): channel 0 cable probability, 1 terminal probability, 2-3 the
 //! terminal's x/y offset in its cell, 4-5 cos 2θ and sin 2θ of the cable's direction.
+//! A terminal peak with no cable beside it ([`Decoding::min_cable`]) is not an end: on
+//! backgrounds the network never saw, texture fires the terminal head more often than
+//! the cable head (README, Accuracy).
 
-use super::output::{Decoding, Letterbox, heatmap};
+use super::output::{Decoding, END_CABLE_REACH, Letterbox, heatmap};
 use super::{DetectError, Perception};
 use crate::engine::CableField;
 
@@ -31,7 +34,7 @@ pub fn decode(
         )));
     }
     let plane = |c: usize| &data[c * cells..(c + 1) * cells];
-    let ends = heatmap(
+    let mut ends = heatmap(
         &[1, 3, gh as i64, gw as i64],
         &data[cells..4 * cells],
         fit,
@@ -53,6 +56,10 @@ pub fn decode(
             .map(|(&c, &s)| [c.clamp(-1.0, 1.0), s.clamp(-1.0, 1.0)])
             .collect(),
     };
+    ends.retain(|e| {
+        let [x, y] = e.point.map(|v| v as f32);
+        field.max_cable_near(x, y, END_CABLE_REACH) >= decoding.min_cable
+    });
     Ok(Perception {
         ends,
         field: Some(field),
@@ -79,6 +86,7 @@ mod tests {
         let decoding = Decoding {
             threshold: 0.5,
             nms_radius_px: 10.0,
+            min_cable: 0.0,
         };
         let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, decoding).unwrap();
         assert_eq!(seen.ends.len(), 1);
@@ -88,5 +96,32 @@ mod tests {
         assert!((field.cable_at(10.5 * 8.0, 20.5 * 8.0) - 0.9).abs() < 1e-6);
         assert_eq!(field.orientation_at(10.5 * 8.0, 20.5 * 8.0), [-1.0, 0.0]);
         assert!(decode(&[1, 3, 60, 80], &data[..3 * cells], fit, decoding).is_err());
+    }
+
+    #[test]
+    fn a_terminal_peak_with_no_cable_beside_it_is_not_an_end() {
+        let fit = Letterbox::fit(640, 480, [320, 240]);
+        let (gw, gh) = (80usize, 60usize);
+        let cells = gw * gh;
+        let mut data = vec![0.0f32; 6 * cells];
+        let at = |c: usize, x: usize, y: usize| c * cells + y * gw + x;
+        // Two terminal peaks; a cable two cells from the first only.
+        data[at(1, 30, 40)] = 0.8;
+        data[at(1, 60, 10)] = 0.8;
+        data[at(0, 32, 42)] = 0.5;
+        let decoding = Decoding {
+            threshold: 0.5,
+            nms_radius_px: 10.0,
+            min_cable: 0.2,
+        };
+        let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, decoding).unwrap();
+        assert_eq!(seen.ends.len(), 1);
+        assert_eq!(seen.ends[0].point, [30.0 * 8.0, 40.0 * 8.0]);
+        let keep_all = Decoding {
+            min_cable: 0.0,
+            ..decoding
+        };
+        let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, keep_all).unwrap();
+        assert_eq!(seen.ends.len(), 2);
     }
 }

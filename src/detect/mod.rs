@@ -147,6 +147,9 @@ pub struct DetectorConfig {
     pub detect_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
     pub detect_nms_px: f64,
+    /// With a cable-field model, ends with no cable probability of at least this within
+    /// two cells are dropped (0 keeps every end; README, Accuracy).
+    pub detect_min_cable: f32,
     /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
     pub ort_threads: usize,
     /// ONNX Runtime shared library; `None` looks in the default places
@@ -163,6 +166,7 @@ impl Default for DetectorConfig {
             model_input_height: 240,
             detect_threshold: 0.25,
             detect_nms_px: 10.0,
+            detect_min_cable: 0.2,
             ort_threads: 1,
             ort_library: None,
         }
@@ -180,6 +184,9 @@ impl DetectorConfig {
         }
         if self.detect_nms_px.is_nan() || self.detect_nms_px < 0.0 {
             return Err("detect NMS radius must be a non-negative number of pixels".into());
+        }
+        if !(0.0..=1.0).contains(&self.detect_min_cable) {
+            return Err("detect minimum cable probability must lie in 0..=1".into());
         }
         if self.ort_threads == 0 {
             return Err("ONNX Runtime threads must be at least 1".into());

@@ -135,6 +135,7 @@ impl OnnxDetector {
             decoding: Decoding {
                 threshold: config.detect_threshold,
                 nms_radius_px: config.detect_nms_px,
+                min_cable: config.detect_min_cable,
             },
         };
         // Every session runs once now: a bad model fails here, and no worker's first

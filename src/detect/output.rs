@@ -82,7 +82,14 @@ pub struct Decoding {
     pub threshold: f32,
     /// Two ends closer than this (photo pixels) are one: the more confident is kept.
     pub nms_radius_px: f64,
+    /// With a cable field: an end with no cell of at least this cable probability
+    /// within [`END_CABLE_REACH`] cells is dropped (an end lies where a cable does).
+    pub min_cable: f32,
 }
+
+/// Cells around an end searched for its cable ([`Decoding::min_cable`]): two cells, 16
+/// photo pixels at the working size, about two cable widths.
+pub const END_CABLE_REACH: usize = 2;
 
 /// Decodes a keypoint heatmap `[1, C, H', W']`: channel 0 is the probability of an end
 /// in each cell; with C = 3, channels 1 and 2 are the end's x and y offset inside the
@@ -269,6 +276,7 @@ mod tests {
     const DECODING: Decoding = Decoding {
         threshold: 0.3,
         nms_radius_px: 12.0,
+        min_cable: 0.0,
     };
 
     #[test]

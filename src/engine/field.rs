@@ -65,6 +65,20 @@ impl CableField {
         })
     }
 
+    /// Highest cable probability of the cells within `reach` cells (each way) of the
+    /// cell holding photo point (x, y).
+    pub fn max_cable_near(&self, x: f32, y: f32, reach: usize) -> f32 {
+        let cell = |v: f32, size: f32, n: usize| ((v / size).max(0.0) as usize).min(n - 1);
+        let (cx, cy) = (
+            cell(x, self.cell_px[0], self.width),
+            cell(y, self.cell_px[1], self.height),
+        );
+        let xs = cx.saturating_sub(reach)..(cx + reach + 1).min(self.width);
+        (cy.saturating_sub(reach)..(cy + reach + 1).min(self.height))
+            .flat_map(|gy| self.cable[gy * self.width + xs.start..gy * self.width + xs.end].iter())
+            .fold(0.0, |m, &p| m.max(p))
+    }
+
     /// (cos 2θ, sin 2θ) at photo point (x, y).
     pub fn orientation_at(&self, x: f32, y: f32) -> [f32; 2] {
         self.bilinear(&self.orientation, x, y, |taps| {
@@ -192,6 +206,32 @@ mod tests {
         );
         assert!(f.cable_at(-50.0, 2.0).abs() < 1e-6, "clamped outside");
         assert_eq!(f.share_on_cable(&[[5.0, 15.0], [5.0, 25.0]], 0.5), 0.5);
+    }
+
+    #[test]
+    fn the_strongest_cable_near_a_point_is_found_within_its_reach() {
+        // A 6x5 field of 10 px cells, one cell of cable at column 1, row 1.
+        let mut cable = vec![0.1; 30];
+        cable[6 + 1] = 0.8;
+        let f = CableField {
+            width: 6,
+            height: 5,
+            cell_px: [10.0, 10.0],
+            cable,
+            orientation: vec![[1.0, 0.0]; 30],
+        };
+        assert_eq!(f.max_cable_near(15.0, 15.0, 0), 0.8, "its own cell");
+        assert_eq!(
+            f.max_cable_near(35.0, 35.0, 2),
+            0.8,
+            "two cells off diagonally"
+        );
+        assert_eq!(f.max_cable_near(45.0, 15.0, 2), 0.1, "three cells off");
+        assert_eq!(
+            f.max_cable_near(-40.0, 500.0, 1),
+            0.1,
+            "clamped into the grid"
+        );
     }
 
     #[test]
