@@ -70,58 +70,72 @@ pub fn decode(
 mod tests {
     use super::*;
 
+    /// A 640x480 photo seen at 320x240: its letterbox and an empty 80x60 output
+    /// (8 photo px per cell), set with [`Output::set`].
+    struct Output {
+        fit: Letterbox,
+        data: Vec<f32>,
+    }
+
+    const GRID: [usize; 2] = [80, 60];
+
+    impl Output {
+        fn new() -> Self {
+            Self {
+                fit: Letterbox::fit(640, 480, [320, 240]),
+                data: vec![0.0; CHANNELS as usize * GRID[0] * GRID[1]],
+            }
+        }
+
+        fn set(&mut self, channel: usize, x: usize, y: usize, value: f32) {
+            self.data[(channel * GRID[1] + y) * GRID[0] + x] = value;
+        }
+
+        fn decode(&self, threshold: f32, min_cable: f32) -> Result<Perception, DetectError> {
+            let decoding = Decoding {
+                threshold,
+                nms_radius_px: 10.0,
+                min_cable,
+            };
+            let shape = [1, CHANNELS, GRID[1] as i64, GRID[0] as i64];
+            decode(&shape, &self.data, self.fit, decoding)
+        }
+    }
+
     #[test]
     fn decodes_terminals_and_field_in_photo_coordinates() {
-        // A 640x480 photo seen at 320x240, grid 80x60 (8 photo px per cell).
-        let fit = Letterbox::fit(640, 480, [320, 240]);
-        let (gw, gh) = (80usize, 60usize);
-        let cells = gw * gh;
-        let mut data = vec![0.0f32; 6 * cells];
-        let at = |c: usize, x: usize, y: usize| c * cells + y * gw + x;
-        data[at(0, 10, 20)] = 0.9; // cable
-        data[at(1, 30, 40)] = 0.8; // terminal, offset (0.5, 0.25)
-        data[at(2, 30, 40)] = 0.5;
-        data[at(3, 30, 40)] = 0.25;
-        data[at(4, 10, 20)] = -1.0; // vertical: cos 2θ = -1
-        let decoding = Decoding {
-            threshold: 0.5,
-            nms_radius_px: 10.0,
-            min_cable: 0.0,
-        };
-        let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, decoding).unwrap();
+        let mut out = Output::new();
+        out.set(0, 10, 20, 0.9); // cable
+        out.set(1, 30, 40, 0.8); // terminal, offset (0.5, 0.25)
+        out.set(2, 30, 40, 0.5);
+        out.set(3, 30, 40, 0.25);
+        out.set(4, 10, 20, -1.0); // vertical: cos 2θ = -1
+        let seen = out.decode(0.5, 0.0).unwrap();
         assert_eq!(seen.ends.len(), 1);
         assert_eq!(seen.ends[0].point, [30.5 * 8.0, 40.25 * 8.0]);
         let field = seen.field.unwrap();
         assert_eq!(field.cell_px, [8.0, 8.0]);
         assert!((field.cable_at(10.5 * 8.0, 20.5 * 8.0) - 0.9).abs() < 1e-6);
         assert_eq!(field.orientation_at(10.5 * 8.0, 20.5 * 8.0), [-1.0, 0.0]);
-        assert!(decode(&[1, 3, 60, 80], &data[..3 * cells], fit, decoding).is_err());
+        let cells = GRID[0] * GRID[1];
+        let decoding = Decoding {
+            threshold: 0.5,
+            nms_radius_px: 10.0,
+            min_cable: 0.0,
+        };
+        assert!(decode(&[1, 3, 60, 80], &out.data[..3 * cells], out.fit, decoding).is_err());
     }
 
     #[test]
     fn a_terminal_peak_with_no_cable_beside_it_is_not_an_end() {
-        let fit = Letterbox::fit(640, 480, [320, 240]);
-        let (gw, gh) = (80usize, 60usize);
-        let cells = gw * gh;
-        let mut data = vec![0.0f32; 6 * cells];
-        let at = |c: usize, x: usize, y: usize| c * cells + y * gw + x;
+        let mut out = Output::new();
         // Two terminal peaks; a cable two cells from the first only.
-        data[at(1, 30, 40)] = 0.8;
-        data[at(1, 60, 10)] = 0.8;
-        data[at(0, 32, 42)] = 0.5;
-        let decoding = Decoding {
-            threshold: 0.5,
-            nms_radius_px: 10.0,
-            min_cable: 0.2,
-        };
-        let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, decoding).unwrap();
+        out.set(1, 30, 40, 0.8);
+        out.set(1, 60, 10, 0.8);
+        out.set(0, 32, 42, 0.5);
+        let seen = out.decode(0.5, 0.2).unwrap();
         assert_eq!(seen.ends.len(), 1);
         assert_eq!(seen.ends[0].point, [30.0 * 8.0, 40.0 * 8.0]);
-        let keep_all = Decoding {
-            min_cable: 0.0,
-            ..decoding
-        };
-        let seen = decode(&[1, 6, gh as i64, gw as i64], &data, fit, keep_all).unwrap();
-        assert_eq!(seen.ends.len(), 2);
+        assert_eq!(out.decode(0.5, 0.0).unwrap().ends.len(), 2, "the rule off");
     }
 }
