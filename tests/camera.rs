@@ -260,31 +260,50 @@ fn far_cables_half_as_wide_as_near_ones_are_all_found() {
     assert!(mask_iou(&out, &truth.mask) > 0.6);
 }
 
-#[test]
-fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
-    // Cables 24 px wide at 640x480: a camera about 2.5 times closer than the one the
-    // engine's lengths suit. The first pass measures them and the photo is segmented
-    // again smaller; without the correction the masks are far too thin.
+/// Scenes of two `cable_width` px cables at 640x480, seeds 1-4: `check` gets each
+/// one's working scale and its mask IoU with the width correction and without it.
+fn with_and_without_correction(cable_width: f32, check: impl Fn(u64, f32, f64, f64)) {
+    let no_correction = Params {
+        width_tolerance: 100.0,
+        ..Params::default()
+    };
     for seed in 1..=4 {
-        let truth = scene(&spec(640, 480, 24.0, seed));
+        let truth = scene(&spec(640, 480, cable_width, seed));
         let bytes = jpeg(&truth.image);
         let out = run(&bytes, &truth.ends());
-        let scale = out.segmentation.working_scale;
-        assert!(
-            (0.3..0.75).contains(&scale),
-            "seed {seed}: working scale {scale}"
-        );
-        let no_correction = Params {
-            width_tolerance: 100.0,
-            ..Params::default()
-        };
         let fixed = run_with(&bytes, &truth.ends(), &no_correction);
         assert_eq!(fixed.segmentation.working_scale, 1.0);
         let corrected = mask_iou(&out, &truth.mask);
         let uncorrected = mask_iou(&fixed, &truth.mask);
         eprintln!(
-            "seed {seed}: mask IoU {corrected:.3} corrected, {uncorrected:.3} at the default scale"
+            "width {cable_width}, seed {seed}: mask IoU {corrected:.3} corrected, \
+             {uncorrected:.3} at the default scale"
+        );
+        check(seed, out.segmentation.working_scale, corrected, uncorrected);
+    }
+}
+
+#[test]
+fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
+    // Cables 24 px wide at 640x480: a camera about 2.5 times closer than the one the
+    // engine's lengths suit. The first pass measures them and the photo is segmented
+    // again smaller; without the correction the masks are far too thin.
+    with_and_without_correction(24.0, |seed, scale, corrected, uncorrected| {
+        assert!(
+            (0.3..0.75).contains(&scale),
+            "seed {seed}: working scale {scale}"
         );
         assert!(corrected > 1.5 * uncorrected, "seed {seed}");
-    }
+    });
+}
+
+#[test]
+fn a_farther_camera_is_segmented_at_the_scale_its_thin_cables_ask_for() {
+    // Cables 3 px wide at 640x480 (thin rods, or a camera far from the table): the
+    // first pass measures them and the photo is segmented again enlarged, at most twice.
+    with_and_without_correction(3.0, |seed, scale, corrected, uncorrected| {
+        assert_eq!(scale, 2.0, "seed {seed}");
+        assert!(corrected > 0.6, "seed {seed}: {corrected:.3}");
+        assert!(corrected > 1.5 * uncorrected, "seed {seed}");
+    });
 }

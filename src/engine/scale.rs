@@ -189,21 +189,17 @@ impl Segmentation {
 
     /// The factor to multiply the working scale by so that these cables (in photo
     /// pixels, found at `frame`) would be [`Params::nominal_width_px`] wide: `None`
-    /// when their median width is within [`Params::width_tolerance`] of nominal, or
-    /// when there is no cable to measure. Bounded to 0.25..=2.
+    /// when their width ([`measured_width`]) is within [`Params::width_tolerance`] of
+    /// nominal, or when there is no cable to measure. Bounded to 0.25..=2.
     pub fn width_correction(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
-        let mut widths: Vec<f32> = self
+        let widths: Vec<(f32, f32)> = self
             .cables
             .iter()
-            .map(|c| c.width_px * frame.scale())
-            .filter(|w| w.is_finite() && *w > 0.0)
+            .map(|c| (c.width_px * frame.scale(), c.length_px))
+            .filter(|(w, _)| w.is_finite() && *w > 0.0)
             .collect();
-        if widths.is_empty() {
-            return None;
-        }
-        widths.sort_by(|a, b| a.partial_cmp(b).unwrap_or(Ordering::Equal));
-        let median = widths[widths.len() / 2] as f64;
-        let ratio = params.nominal_width_px as f64 / median;
+        let width = measured_width(widths, params.nominal_width_px)?;
+        let ratio = params.nominal_width_px as f64 / width;
         let tolerance = params.width_tolerance as f64;
         (ratio > tolerance || ratio < 1.0 / tolerance).then(|| ratio.clamp(0.25, 2.0))
     }
@@ -215,9 +211,49 @@ impl Segmentation {
     }
 }
 
+/// The cables' width from `(width, length)` pairs in working pixels: their median
+/// width, or their length-weighted median width when that lies farther from `nominal`
+/// (by ratio); `None` for no cable. At the wrong scale the engine also finds stray
+/// cables (a walk over superpixels much wider or narrower than the cables), and their
+/// measured widths lean towards the nominal width; with few cables one of them can
+/// decide the plain median (two thin rods measured 3.2 and 9.2 px: the median 9.2 asks
+/// for no correction), so the estimate farther from nominal is the one taken.
+fn measured_width(mut widths: Vec<(f32, f32)>, nominal: f32) -> Option<f64> {
+    widths.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(Ordering::Equal));
+    let median = f64::from(widths.get(widths.len() / 2)?.0);
+    let half = widths.iter().map(|w| w.1.max(0.0)).sum::<f32>() / 2.0;
+    let mut seen = 0.0;
+    let weighted = widths
+        .iter()
+        .find(|w| {
+            seen += w.1.max(0.0);
+            seen >= half
+        })
+        .map_or(median, |w| f64::from(w.0));
+    let off = |w: f64| (f64::from(nominal) / w).ln().abs();
+    Some(if off(weighted) > off(median) {
+        weighted
+    } else {
+        median
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_width_estimate_farther_from_nominal_is_taken() {
+        // Two thin rods, the longer measured right (3.2 px), a short stray at 9.2.
+        assert_eq!(
+            measured_width(vec![(9.2, 80.0), (3.2, 500.0)], 8.5),
+            Some(3.2f32.into())
+        );
+        // A long stray walk near nominal does not outvote the wide cables.
+        let wide = vec![(11.9, 1000.0), (14.7, 50.0), (14.9, 130.0)];
+        assert_eq!(measured_width(wide, 8.5), Some(14.7f32.into()));
+        assert_eq!(measured_width(Vec::new(), 8.5), None);
+    }
 
     #[test]
     fn photos_are_brought_to_the_working_size() {
