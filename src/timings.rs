@@ -13,8 +13,9 @@ pub struct Timings {
     pub queue: f64,
     /// Image decoding, EXIF orientation and resampling to the working size.
     pub decode: f64,
-    /// The network: endpoint detection and cable field (0 when none is loaded). It runs
-    /// on a second thread while `superpixels` runs, so the stages overlap in `total`.
+    /// The network: endpoint detection and cable field (0 when none is loaded). When it
+    /// runs on a second thread beside SLIC (`pipeline::Job::overlap`, the service's
+    /// choice when a worker is idle), it and `superpixels` overlap in `total`.
     pub endpoints: f64,
     /// Colour conversion, blur and SLIC.
     pub superpixels: f64,

@@ -163,6 +163,16 @@ fn bad_parameters_and_ends_are_errors_not_panics() {
         engine::segment(&tiny, &[], &p),
         Err(engine::EngineError::ImageTooSmall { .. })
     ));
+    // Superpixels of another image.
+    let other = image::RgbImage::new(32, 48);
+    let over = engine::oversegment(&other, &p, engine::Deadline::NONE).unwrap();
+    assert!(matches!(
+        engine::segment_oversegmented(&s.image, over, &[], &[], None, &p, engine::Deadline::NONE),
+        Err(engine::EngineError::OtherImage {
+            superpixels: [32, 48],
+            image: [64, 48]
+        })
+    ));
     // No ends: a valid, empty answer.
     let seg = engine::segment(&s.image, &[], &p).unwrap();
     assert!(seg.cables.is_empty());

@@ -49,6 +49,15 @@ pub enum EngineError {
         /// Position of the end in the given list.
         index: usize,
     },
+    /// [`crate::engine::segment_oversegmented`] was given the superpixels of an image
+    /// of another size (a bug of the caller).
+    #[error("superpixels of a {}x{} image given with a {}x{} image", .superpixels[0], .superpixels[1], .image[0], .image[1])]
+    OtherImage {
+        /// Width and height the superpixels were made for.
+        superpixels: [usize; 2],
+        /// Width and height of the image given with them.
+        image: [u32; 2],
+    },
     /// Not one confidence per end.
     #[error("{confidences} confidences for {ends} ends")]
     BadConfidences {

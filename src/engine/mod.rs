@@ -173,7 +173,8 @@ pub fn oversegment(
 }
 
 /// The rest of [`segment_with_confidence`]: graph, walks, pairing and cables on
-/// `image` oversegmented by [`oversegment`] with the same `params`.
+/// `image` oversegmented by [`oversegment`] with the same `params`
+/// ([`EngineError::OtherImage`] when `over` was made from an image of another size).
 pub fn segment_oversegmented(
     image: &RgbImage,
     over: Oversegmented,
@@ -190,6 +191,12 @@ pub fn segment_oversegmented(
         });
     }
     let (width, height) = image.dimensions();
+    if [over.sp.width, over.sp.height] != [width as usize, height as usize] {
+        return Err(EngineError::OtherImage {
+            superpixels: [over.sp.width, over.sp.height],
+            image: [width, height],
+        });
+    }
     validate_ends(ends, width, height)?;
     let Oversegmented {
         lab,

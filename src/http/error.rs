@@ -273,7 +273,9 @@ impl From<EngineError> for ApiError {
             }
             EngineError::ImageTooSmall { .. } => ErrorCode::ImageTooSmall,
             // The service maps a passed deadline itself (it knows the configured one).
-            EngineError::BadConfidences { .. } | EngineError::DeadlineExceeded => {
+            EngineError::BadConfidences { .. }
+            | EngineError::OtherImage { .. }
+            | EngineError::DeadlineExceeded => {
                 return Self::Internal(e.to_string());
             }
         };
