@@ -124,22 +124,20 @@ fn a_small_photo_shown_as_a_larger_frame_is_seen_from_its_own_pixels() {
 fn the_network_segments_the_development_split() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)
         .expect("bundled model (run `make setup`)");
-    let (simple_iou, hard_iou) = common::split_iou(
+    common::assert_split_iou(
+        "photo alone",
         Some(&network),
         eval::EndsFrom::Network,
         eval::Camera::default(),
+        PHOTO_ALONE,
     );
-    eprintln!("photo alone, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
-    assert!(simple_iou >= PHOTO_ALONE.0, "simple {simple_iou:.3}");
-    assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
-    let (simple_iou, hard_iou) = common::split_iou(
+    common::assert_split_iou(
+        "true ends and field",
         Some(&network),
         eval::EndsFrom::Truth,
         eval::Camera::default(),
+        TRUE_ENDS,
     );
-    eprintln!("true ends and field, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
-    assert!(simple_iou >= TRUE_ENDS.0, "simple {simple_iou:.3}");
-    assert!(hard_iou >= TRUE_ENDS.1, "hard {hard_iou:.3}");
 }
 
 /// An underexposed photo (every value multiplied by 0.3: a dim cell, a short exposure)
@@ -155,12 +153,13 @@ fn an_underexposed_photo_is_segmented_like_a_well_exposed_one() {
         exposure: 0.3,
         ..eval::Camera::default()
     };
-    let (simple_iou, hard_iou) = common::split_iou(Some(&network), eval::EndsFrom::Network, dim);
-    eprintln!(
-        "exposure 0.3, photo alone, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}"
+    common::assert_split_iou(
+        "exposure 0.3, photo alone",
+        Some(&network),
+        eval::EndsFrom::Network,
+        dim,
+        PHOTO_ALONE,
     );
-    assert!(simple_iou >= PHOTO_ALONE.0, "simple {simple_iou:.3}");
-    assert!(hard_iou >= PHOTO_ALONE.1, "hard {hard_iou:.3}");
 }
 
 /// With `overlap` the pipeline runs the network on a second thread while SLIC runs:

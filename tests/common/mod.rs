@@ -31,14 +31,17 @@ pub fn photo_alone(
     .expect("the pipeline runs")
 }
 
-/// Weighted IoU of `simple` (preset `default`) and `hard` (preset `clutter`) on the
-/// development split as `camera` sees it, with ends from `ends` and the cable field of
-/// `network` when given.
-pub fn split_iou(
+/// Asserts that the weighted IoU of `simple` (preset `default`) and `hard` (preset
+/// `clutter`) on the development split as `camera` sees it, with ends from `ends` and
+/// the cable field of `network` when given, reaches `floors` (simple, hard); prints
+/// both under `label`.
+pub fn assert_split_iou(
+    label: &str,
     network: Option<&dyn EndpointDetector>,
     ends: eval::EndsFrom,
     camera: eval::Camera,
-) -> (f64, f64) {
+    floors: (f64, f64),
+) {
     let samples = eval::load_dataset(&eval::default_dataset_dir())
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
     let simple = Params::preset("default").unwrap();
@@ -49,8 +52,9 @@ pub fn split_iou(
         camera,
     };
     let results = eval::evaluate_all(&samples, &simple, &hard, setup, |_| {}).unwrap();
-    (
-        eval::weighted_iou(&results, "simple"),
-        eval::weighted_iou(&results, "hard"),
-    )
+    let simple_iou = eval::weighted_iou(&results, "simple");
+    let hard_iou = eval::weighted_iou(&results, "hard");
+    eprintln!("{label}, weighted IoU: simple {simple_iou:.3}, hard {hard_iou:.3}");
+    assert!(simple_iou >= floors.0, "{label}: simple {simple_iou:.3}");
+    assert!(hard_iou >= floors.1, "{label}: hard {hard_iou:.3}");
 }
