@@ -197,18 +197,40 @@ pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
     if delta == 0 {
         return [0, 0, v as u8];
     }
-    let s = (255 * delta + v / 2) / v;
-    // Hue in degrees, 0..360, then halved.
-    let h = if v == r {
-        60.0 * (g - b) as f32 / delta as f32
+    let s = div_exact_small(255 * delta + v / 2, v);
+    // Halved hue = base + 30 * num / delta, base in halved degrees; a negative hue
+    // (red sector, b > g) wraps by 180.
+    let (base, num) = if v == r {
+        (if g < b { 180 } else { 0 }, g - b)
     } else if v == g {
-        120.0 + 60.0 * (b - r) as f32 / delta as f32
+        (60, b - r)
     } else {
-        240.0 + 60.0 * (r - g) as f32 / delta as f32
+        (120, r - g)
     };
-    let h = if h < 0.0 { h + 360.0 } else { h };
-    let h = ((h / 2.0).round() as i32) % 180;
-    [h as u8, s as u8, v as u8]
+    // Rounded half up, in integers: the value is never negative, so this is the
+    // nearest integer with ties away from zero, as OpenCV's rounding of the float.
+    let h = div_exact_small(2 * base * delta + 60 * num + delta, 2 * delta);
+    [(h % 180) as u8, s as u8, v as u8]
+}
+
+/// ⌈2⁴⁰ / d⌉ for every divisor d < 512 that [`rgb_to_hsv`] divides by.
+const RECIPROCALS: [u64; 512] = {
+    let mut t = [0u64; 512];
+    let mut d = 1;
+    while d < 512 {
+        t[d] = (1u64 << 40).div_ceil(d as u64);
+        d += 1;
+    }
+    t
+};
+
+/// ⌊a / d⌋ for 0 ≤ a < 2¹⁸ and 0 < d < 512, by a multiply: the reciprocal's rounding
+/// error, at most d / 2⁴⁰ per unit of a, stays below the 1 / d that would change
+/// the quotient (the exhaustive hue test checks every colour).
+#[inline]
+fn div_exact_small(a: i32, d: i32) -> i32 {
+    debug_assert!((0..1 << 18).contains(&a) && (1..512).contains(&d));
+    ((a as u64 * RECIPROCALS[d as usize]) >> 40) as i32
 }
 
 #[cfg(test)]
@@ -251,6 +273,53 @@ mod tests {
         let lab = LabImage::from_rgb(&rgb, 16, 16);
         for (i, px) in rgb.chunks_exact(3).enumerate() {
             assert_eq!(lab.at(i), rgb_to_lab([px[0], px[1], px[2]]));
+        }
+    }
+
+    /// The float formula the integer hue must reproduce exactly.
+    fn hsv_hue_in_floats(rgb: [u8; 3]) -> u8 {
+        let (r, g, b) = (rgb[0] as i32, rgb[1] as i32, rgb[2] as i32);
+        let v = r.max(g).max(b);
+        let delta = v - r.min(g).min(b);
+        if delta == 0 {
+            return 0;
+        }
+        let h = if v == r {
+            60.0 * (g - b) as f32 / delta as f32
+        } else if v == g {
+            120.0 + 60.0 * (b - r) as f32 / delta as f32
+        } else {
+            240.0 + 60.0 * (r - g) as f32 / delta as f32
+        };
+        let h = if h < 0.0 { h + 360.0 } else { h };
+        (((h / 2.0).round() as i32) % 180) as u8
+    }
+
+    #[test]
+    fn integer_hsv_matches_the_float_formula_for_every_colour() {
+        for c in 0u32..1 << 24 {
+            let rgb = [(c >> 16) as u8, (c >> 8) as u8, c as u8];
+            let [h, s, v] = rgb_to_hsv(rgb);
+            assert_eq!(h, hsv_hue_in_floats(rgb), "{rgb:?}");
+            let (max, min) = (
+                *rgb.iter().max().unwrap() as i32,
+                *rgb.iter().min().unwrap() as i32,
+            );
+            let expected_s = if max == 0 {
+                0
+            } else {
+                (255 * (max - min) + max / 2) / max
+            };
+            assert_eq!((s as i32, v as i32), (expected_s, max), "{rgb:?}");
+        }
+    }
+
+    #[test]
+    fn small_divisions_are_exact() {
+        for d in 1..512 {
+            for a in (0..1 << 18).step_by(7).chain([(1 << 18) - 1]) {
+                assert_eq!(div_exact_small(a, d), a / d, "{a} / {d}");
+            }
         }
     }
 

@@ -30,6 +30,35 @@ pub struct Graph {
     cells: usize,
 }
 
+/// One superpixel's running sums.
+#[derive(Debug, Clone, Copy, Default)]
+struct Totals {
+    x: u64,
+    y: u64,
+    lab: [f64; 3],
+    pixels: u64,
+}
+
+/// The sums over a row's run of pixels of one superpixel.
+#[derive(Debug, Clone, Copy, Default)]
+struct Run {
+    x: u64,
+    lab: [f64; 3],
+    pixels: u64,
+}
+
+impl Totals {
+    /// Adds the run `run` of row `y`.
+    fn add(&mut self, run: &Run, y: usize) {
+        self.x += run.x;
+        self.y += y as u64 * run.pixels;
+        for (t, r) in self.lab.iter_mut().zip(run.lab) {
+            *t += r;
+        }
+        self.pixels += run.pixels;
+    }
+}
+
 impl Graph {
     /// Builds the graph of `sp` over the original colours `rgb` (interleaved RGB8) and
     /// the Lab planes `lab`, with `bins` histogram bins per HSV channel (joint, bins³ cells).
@@ -37,8 +66,11 @@ impl Graph {
         let (w, h, n) = (sp.width, sp.height, sp.count);
         let bins = bins.max(1) as usize;
         let cells = bins * bins * bins;
-        let mut sums = vec![[0.0f64; 6]; n];
-        let mut histograms = vec![0.0f32; n * cells];
+        // A row's run of one label is summed in registers and added to its superpixel
+        // once; the histograms count in integers (no float add waits on the previous
+        // one through memory).
+        let mut sums = vec![Totals::default(); n];
+        let mut counts = vec![0u32; n * cells];
         // Neighbour lists are short (about 6 per superpixel): a linear scan beats hashing.
         let mut lists: Vec<Vec<u32>> = vec![Vec::with_capacity(8); n];
         let mut link = |a: u32, b: u32| {
@@ -48,8 +80,11 @@ impl Graph {
             }
         };
         for y in 0..h {
+            let row = y * w;
+            let mut run = Run::default();
+            let mut run_label = sp.labels[row];
             for x in 0..w {
-                let p = y * w + x;
+                let p = row + x;
                 let k = sp.labels[p];
                 if x + 1 < w {
                     link(k, sp.labels[p + 1]);
@@ -57,39 +92,43 @@ impl Graph {
                 if y + 1 < h {
                     link(k, sp.labels[p + w]);
                 }
-                let px = [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]];
-                let s = &mut sums[k as usize];
-                s[0] += x as f64;
-                s[1] += y as f64;
-                s[2] += lab.l[p] as f64;
-                s[3] += lab.a[p] as f64;
-                s[4] += lab.b[p] as f64;
-                s[5] += 1.0;
-                let [hh, ss, vv] = rgb_to_hsv(px);
+                if k != run_label {
+                    sums[run_label as usize].add(&run, y);
+                    run = Run::default();
+                    run_label = k;
+                }
+                run.x += x as u64;
+                run.lab[0] += lab.l[p] as f64;
+                run.lab[1] += lab.a[p] as f64;
+                run.lab[2] += lab.b[p] as f64;
+                run.pixels += 1;
+                let [hh, ss, vv] = rgb_to_hsv([rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]]);
                 let cell = (hh as usize * bins / 180) * bins * bins
                     + (ss as usize * bins / 256) * bins
                     + vv as usize * bins / 256;
-                histograms[k as usize * cells + cell] += 1.0;
+                counts[k as usize * cells + cell] += 1;
             }
+            sums[run_label as usize].add(&run, y);
         }
         let vertices: Vec<Vertex> = sums
             .iter()
             .map(|s| {
-                let inv = 1.0 / s[5].max(1.0);
-                let f = |i: usize| (s[i] * inv) as f32;
+                let inv = 1.0 / s.pixels.max(1) as f64;
                 Vertex {
-                    centroid: [f(0), f(1)],
-                    pixels: s[5] as u32,
-                    mean_lab: [f(2), f(3), f(4)],
+                    centroid: [(s.x as f64 * inv) as f32, (s.y as f64 * inv) as f32],
+                    pixels: s.pixels as u32,
+                    mean_lab: s.lab.map(|c| (c * inv) as f32),
                 }
             })
             .collect();
-        for (k, v) in vertices.iter().enumerate() {
-            let inv = 1.0 / v.pixels.max(1) as f32;
-            histograms[k * cells..(k + 1) * cells]
-                .iter_mut()
-                .for_each(|c| *c *= inv);
-        }
+        let histograms: Vec<f32> = counts
+            .chunks_exact(cells)
+            .zip(&vertices)
+            .flat_map(|(c, v)| {
+                let inv = 1.0 / v.pixels.max(1) as f32;
+                c.iter().map(move |&k| k as f32 * inv)
+            })
+            .collect();
         let mut offsets = Vec::with_capacity(n + 1);
         let mut adjacency = Vec::new();
         offsets.push(0);
