@@ -4,7 +4,9 @@
 For each background group (white, wood, blue: simple/ by photo number; hard: hard/),
 runs `ariadne eval` with the model trained without that group (out/field-GROUP.onnx,
 made by training/train_field.py --holdout GROUP) and reports, on that group's photos
-only: weighted IoU (the paper's metric), cable recall, terminal recall and precision.
+only: weighted IoU (the paper's metric), cable recall, terminal recall and precision;
+with the network's ends, also what the missed terminals have near them (an end found a
+little too far away, the image border, nothing).
 
     python3 scripts/lobo.py [--endpoints detect|gt] [--binary target/release/ariadne]
 """
@@ -33,7 +35,24 @@ def summarise(images):
         / max(sum(i["terminals"] for i in images), 1),
         "terminal_precision": sum(i["terminals_matched"] for i in images)
         / max(sum(i["ends"] for i in images), 1),
+        "terminals": sum(i["terminals"] for i in images),
+        "misses": miss_kinds([m for i in images for m in i["missed_terminals"]]),
     }
+
+
+# A missed terminal with an end this near was marked elsewhere on the same terminal
+# (metal tip against insulation end); one this near the border, with no end near, is
+# likely an annotated end short of the frame where the cable leaves it.
+TERMINAL_MATCH_PX = 15.0  # ariadne eval's matching radius
+NEAR_END_PX = 30.0
+NEAR_FRAME_PX = 20.0
+
+
+def miss_kinds(missed):
+    near = [m for m in missed if (m["nearest_end_px"] or 1e9) <= NEAR_END_PX]
+    frame = [m for m in missed if m not in near and m["border_px"] <= NEAR_FRAME_PX]
+    return {"all": len(missed), "end_near": len(near), "at_frame": len(frame),
+            "elsewhere": len(missed) - len(near) - len(frame)}
 
 
 def main():
@@ -59,6 +78,15 @@ def main():
     for g, r in rows.items():
         print(f"| {g} | {r['images']} | {r['weighted_iou']:.3f} | {r['cable_recall']:.3f} "
               f"| {r['terminal_recall']:.3f} | {r['terminal_precision']:.3f} |")
+    if args.endpoints == "detect":
+        print()
+        print(f"| held-out group | terminals | missed | an end {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away "
+              f"| within {NEAR_FRAME_PX:g} px of the border, no end near | elsewhere |")
+        print("|---|---|---|---|---|---|")
+        for g, r in rows.items():
+            m = r["misses"]
+            print(f"| {g} | {r['terminals']} | {m['all']} | {m['end_near']} | {m['at_frame']} "
+                  f"| {m['elsewhere']} |")
     json.dump(rows, sys.stderr)
 
 

@@ -70,11 +70,19 @@ pub struct SetSummary {
     pub median_total_ms: f64,
 }
 
-/// Number of `found` points matched one-to-one to a `truth` point within `radius`,
-/// taking `found` in order (most confident first) and each its nearest free truth.
+/// Number of `found` points matched one-to-one to a `truth` point within `radius`
+/// (see [`matched_truth`]).
 pub fn match_points(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> usize {
+    matched_truth(found, truth, radius)
+        .into_iter()
+        .filter(|&m| m)
+        .count()
+}
+
+/// Which `truth` points a `found` point is matched to one-to-one within `radius`,
+/// taking `found` in order (most confident first) and each its nearest free truth.
+pub fn matched_truth(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> Vec<bool> {
     let mut used = vec![false; truth.len()];
-    let mut matched = 0;
     for f in found {
         let nearest = truth
             .iter()
@@ -85,10 +93,50 @@ pub fn match_points(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> usiz
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((j, _)) = nearest {
             used[j] = true;
-            matched += 1;
         }
     }
-    matched
+    used
+}
+
+/// A true terminal that no end was matched to, with what lies near it: an end found a
+/// little too far away (the same terminal marked at another point: its metal tip
+/// rather than the insulation's end) or the image border (an annotated end short of
+/// the frame where the cable leaves it).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MissedTerminal {
+    /// The terminal, photo pixels.
+    pub point: [f64; 2],
+    /// Distance to the nearest end found, matched or not; `None` when none was found.
+    pub nearest_end_px: Option<f64>,
+    /// Distance to the nearest image border.
+    pub border_px: f64,
+}
+
+/// The terminals of `truth` left unmatched in `matched`, described against `found`
+/// in a `width` x `height` photo.
+pub fn missed_terminals(
+    found: &[[f64; 2]],
+    truth: &[[f64; 2]],
+    matched: &[bool],
+    width: u32,
+    height: u32,
+) -> Vec<MissedTerminal> {
+    truth
+        .iter()
+        .zip(matched)
+        .filter(|&(_, &m)| !m)
+        .map(|(t, _)| MissedTerminal {
+            point: *t,
+            nearest_end_px: found
+                .iter()
+                .map(|f| (t[0] - f[0]).hypot(t[1] - f[1]))
+                .min_by(f64::total_cmp),
+            border_px: t[0]
+                .min(t[1])
+                .min(width as f64 - 1.0 - t[0])
+                .min(height as f64 - 1.0 - t[1]),
+        })
+        .collect()
 }
 
 /// Summaries per set, in first-seen order.
@@ -142,10 +190,30 @@ mod tests {
     #[test]
     fn points_match_one_to_one_within_the_radius() {
         let truth = [[0.0, 0.0], [100.0, 0.0]];
-        assert_eq!(match_points(&[[3.0, 4.0], [1.0, 0.0]], &truth, 15.0), 1);
+        let first = matched_truth(&[[3.0, 4.0], [1.0, 0.0]], &truth, 15.0);
+        assert_eq!(first, [true, false]);
         assert_eq!(match_points(&[[3.0, 4.0], [90.0, 0.0]], &truth, 15.0), 2);
-        assert_eq!(match_points(&[[20.0, 0.0]], &truth, 15.0), 0);
+        assert_eq!(matched_truth(&[[20.0, 0.0]], &truth, 15.0), [false, false]);
         assert_eq!(match_points(&[], &truth, 15.0), 0);
+    }
+
+    #[test]
+    fn a_missed_terminal_reports_the_nearest_end_and_border() {
+        let truth = [[50.0, 13.0], [200.0, 100.0]];
+        let found = [[50.0, 33.0], [203.0, 104.0]];
+        let matched = matched_truth(&found, &truth, 15.0);
+        let missed = missed_terminals(&found, &truth, &matched, 640, 480);
+        assert_eq!(
+            missed,
+            [MissedTerminal {
+                point: [50.0, 13.0],
+                nearest_end_px: Some(20.0),
+                border_px: 13.0,
+            }]
+        );
+        let alone = missed_terminals(&[], &truth[1..], &[false], 640, 480);
+        assert_eq!(alone[0].nearest_end_px, None);
+        assert_eq!(alone[0].border_px, 100.0);
     }
 
     #[test]
