@@ -5,8 +5,9 @@ For each background group (white, wood, blue: simple/ by photo number; hard: har
 runs `ariadne eval` with the model trained without that group (out/field-GROUP.onnx,
 made by training/train_field.py --holdout GROUP) and reports, on that group's photos
 only: weighted IoU (the paper's metric), cable recall, terminal recall and precision;
-with the network's ends, also what the missed terminals have near them (an end found a
-little too far away, the image border, nothing).
+with the network's ends, also what lies near the missed terminals (an end found a
+little too far away, the image border, nothing) and near the false ends (a terminal a
+little too far away, the border, an annotated cable, none of them).
 
     python3 scripts/lobo.py [--endpoints detect|gt] [--binary target/release/ariadne]
 """
@@ -37,6 +38,8 @@ def summarise(images):
         / max(sum(i["ends"] for i in images), 1),
         "terminals": sum(i["terminals"] for i in images),
         "misses": miss_kinds([m for i in images for m in i["missed_terminals"]]),
+        "ends": sum(i["ends"] for i in images),
+        "false": false_kinds([e for i in images for e in i["false_ends"]]),
     }
 
 
@@ -46,6 +49,23 @@ def summarise(images):
 TERMINAL_MATCH_PX = 15.0  # ariadne eval's matching radius
 NEAR_END_PX = 30.0
 NEAR_FRAME_PX = 20.0
+
+
+ON_CABLE_PX = 10.0
+
+
+def false_kinds(ends):
+    kinds = {"all": len(ends), "terminal_near": 0, "at_frame": 0, "on_cable": 0, "off_cables": 0}
+    for e in ends:
+        if (e["nearest_terminal_px"] or 1e9) <= NEAR_END_PX:
+            kinds["terminal_near"] += 1
+        elif e["border_px"] <= NEAR_FRAME_PX:
+            kinds["at_frame"] += 1
+        elif (e["nearest_cable_px"] or 1e9) <= ON_CABLE_PX:
+            kinds["on_cable"] += 1
+        else:
+            kinds["off_cables"] += 1
+    return kinds
 
 
 def miss_kinds(missed):
@@ -87,6 +107,15 @@ def main():
             m = r["misses"]
             print(f"| {g} | {r['terminals']} | {m['all']} | {m['end_near']} | {m['at_frame']} "
                   f"| {m['elsewhere']} |")
+        print()
+        print(f"| held-out group | ends | false | a terminal {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away "
+              f"| within {NEAR_FRAME_PX:g} px of the border | on an annotated cable (≤ {ON_CABLE_PX:g} px) "
+              f"| off the annotated cables |")
+        print("|---|---|---|---|---|---|---|")
+        for g, r in rows.items():
+            f = r["false"]
+            print(f"| {g} | {r['ends']} | {f['all']} | {f['terminal_near']} | {f['at_frame']} "
+                  f"| {f['on_cable']} | {f['off_cables']} |")
     json.dump(rows, sys.stderr)
 
 

@@ -71,34 +71,48 @@ pub struct SetSummary {
 }
 
 /// Number of `found` points matched one-to-one to a `truth` point within `radius`
-/// (see [`matched_truth`]).
+/// (see [`pair_points`]).
 pub fn match_points(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> usize {
-    matched_truth(found, truth, radius)
+    pair_points(found, truth, radius)
+        .truth
         .into_iter()
         .filter(|&m| m)
         .count()
 }
 
-/// Which `truth` points a `found` point is matched to one-to-one within `radius`,
-/// taking `found` in order (most confident first) and each its nearest free truth.
-pub fn matched_truth(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> Vec<bool> {
-    let mut used = vec![false; truth.len()];
-    for f in found {
+/// Which points of each side were paired by [`pair_points`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pairing {
+    /// One flag per found point.
+    pub found: Vec<bool>,
+    /// One flag per true point.
+    pub truth: Vec<bool>,
+}
+
+/// Pairs `found` points one-to-one with `truth` points within `radius`, taking `found`
+/// in order (most confident first) and each its nearest free truth.
+pub fn pair_points(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> Pairing {
+    let mut pairing = Pairing {
+        found: vec![false; found.len()],
+        truth: vec![false; truth.len()],
+    };
+    for (i, f) in found.iter().enumerate() {
         let nearest = truth
             .iter()
             .enumerate()
-            .filter(|(j, _)| !used[*j])
+            .filter(|(j, _)| !pairing.truth[*j])
             .map(|(j, t)| (j, (t[0] - f[0]).hypot(t[1] - f[1])))
             .filter(|&(_, d)| d <= radius)
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((j, _)) = nearest {
-            used[j] = true;
+            pairing.truth[j] = true;
+            pairing.found[i] = true;
         }
     }
-    used
+    pairing
 }
 
-/// A true terminal that no end was matched to, with what lies near it: an end found a
+/// A true terminal that no end was paired with, with what lies near it: an end found a
 /// little too far away (the same terminal marked at another point: its metal tip
 /// rather than the insulation's end) or the image border (an annotated end short of
 /// the frame where the cable leaves it).
@@ -106,37 +120,98 @@ pub fn matched_truth(found: &[[f64; 2]], truth: &[[f64; 2]], radius: f64) -> Vec
 pub struct MissedTerminal {
     /// The terminal, photo pixels.
     pub point: [f64; 2],
-    /// Distance to the nearest end found, matched or not; `None` when none was found.
+    /// Distance to the nearest end found, paired or not; `None` when none was found.
     pub nearest_end_px: Option<f64>,
     /// Distance to the nearest image border.
     pub border_px: f64,
 }
 
-/// The terminals of `truth` left unmatched in `matched`, described against `found`
-/// in a `width` x `height` photo.
-pub fn missed_terminals(
+/// An end found that no true terminal was paired with, with what lies near it: a
+/// terminal a little too far away, an annotated cable, or neither (the background, or
+/// a cable the annotation leaves out).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FalseEnd {
+    /// The end, photo pixels.
+    pub point: [f64; 2],
+    /// Distance to the nearest true terminal, paired or not; `None` when there is none.
+    pub nearest_terminal_px: Option<f64>,
+    /// Distance to the nearest pixel of the annotated cables' union mask, searched up
+    /// to [`CABLE_SEARCH_PX`]; `None` when none lies that near.
+    pub nearest_cable_px: Option<f64>,
+    /// Distance to the nearest image border.
+    pub border_px: f64,
+}
+
+/// How far around a false end the annotated cables are looked for.
+pub const CABLE_SEARCH_PX: f64 = 30.0;
+
+/// What lies near the unpaired points of both sides.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Misses {
+    /// The true terminals no end was paired with.
+    pub terminals: Vec<MissedTerminal>,
+    /// The ends no true terminal was paired with.
+    pub ends: Vec<FalseEnd>,
+}
+
+/// Describes the points `pairing` left alone, against the other side and the union
+/// mask `cables` of the annotated cables (its size is the photo's).
+pub fn misses(
     found: &[[f64; 2]],
     truth: &[[f64; 2]],
-    matched: &[bool],
-    width: u32,
-    height: u32,
-) -> Vec<MissedTerminal> {
-    truth
-        .iter()
-        .zip(matched)
-        .filter(|&(_, &m)| !m)
-        .map(|(t, _)| MissedTerminal {
-            point: *t,
-            nearest_end_px: found
-                .iter()
-                .map(|f| (t[0] - f[0]).hypot(t[1] - f[1]))
-                .min_by(f64::total_cmp),
-            border_px: t[0]
-                .min(t[1])
-                .min(width as f64 - 1.0 - t[0])
-                .min(height as f64 - 1.0 - t[1]),
-        })
-        .collect()
+    pairing: &Pairing,
+    cables: &GrayImage,
+) -> Misses {
+    let (width, height) = cables.dimensions();
+    let border = |p: &[f64; 2]| {
+        p[0].min(p[1])
+            .min(width as f64 - 1.0 - p[0])
+            .min(height as f64 - 1.0 - p[1])
+    };
+    let nearest = |p: &[f64; 2], to: &[[f64; 2]]| {
+        to.iter()
+            .map(|q| (p[0] - q[0]).hypot(p[1] - q[1]))
+            .min_by(f64::total_cmp)
+    };
+    Misses {
+        terminals: truth
+            .iter()
+            .zip(&pairing.truth)
+            .filter(|&(_, &paired)| !paired)
+            .map(|(t, _)| MissedTerminal {
+                point: *t,
+                nearest_end_px: nearest(t, found),
+                border_px: border(t),
+            })
+            .collect(),
+        ends: found
+            .iter()
+            .zip(&pairing.found)
+            .filter(|&(_, &paired)| !paired)
+            .map(|(f, _)| FalseEnd {
+                point: *f,
+                nearest_terminal_px: nearest(f, truth),
+                nearest_cable_px: nearest_foreground(cables, *f, CABLE_SEARCH_PX),
+                border_px: border(f),
+            })
+            .collect(),
+    }
+}
+
+/// Distance from `p` to the centre of the nearest foreground pixel (> 127) of `mask`
+/// within `radius`, if any.
+fn nearest_foreground(mask: &GrayImage, p: [f64; 2], radius: f64) -> Option<f64> {
+    let (w, h) = mask.dimensions();
+    let lo = |c: f64| (c - radius).floor().max(0.0) as u32;
+    let (x0, y0) = (lo(p[0]), lo(p[1]));
+    let x1 = ((p[0] + radius).ceil().max(0.0) as u32).min(w.saturating_sub(1));
+    let y1 = ((p[1] + radius).ceil().max(0.0) as u32).min(h.saturating_sub(1));
+    (y0..=y1)
+        .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+        .filter(|&(x, y)| mask.get_pixel(x, y)[0] > 127)
+        .map(|(x, y)| (x as f64 - p[0]).hypot(y as f64 - p[1]))
+        .filter(|&d| d <= radius)
+        .min_by(f64::total_cmp)
 }
 
 /// Summaries per set, in first-seen order.
@@ -190,30 +265,54 @@ mod tests {
     #[test]
     fn points_match_one_to_one_within_the_radius() {
         let truth = [[0.0, 0.0], [100.0, 0.0]];
-        let first = matched_truth(&[[3.0, 4.0], [1.0, 0.0]], &truth, 15.0);
-        assert_eq!(first, [true, false]);
+        let first = pair_points(&[[3.0, 4.0], [1.0, 0.0]], &truth, 15.0);
+        assert_eq!(first.truth, [true, false]);
+        assert_eq!(first.found, [true, false]);
         assert_eq!(match_points(&[[3.0, 4.0], [90.0, 0.0]], &truth, 15.0), 2);
-        assert_eq!(matched_truth(&[[20.0, 0.0]], &truth, 15.0), [false, false]);
+        assert_eq!(match_points(&[[20.0, 0.0]], &truth, 15.0), 0);
         assert_eq!(match_points(&[], &truth, 15.0), 0);
     }
 
     #[test]
-    fn a_missed_terminal_reports_the_nearest_end_and_border() {
-        let truth = [[50.0, 13.0], [200.0, 100.0]];
-        let found = [[50.0, 33.0], [203.0, 104.0]];
-        let matched = matched_truth(&found, &truth, 15.0);
-        let missed = missed_terminals(&found, &truth, &matched, 640, 480);
+    fn unpaired_points_report_what_lies_near_them() {
+        // One annotated cable: a horizontal band at rows 100..=104.
+        let cables = GrayImage::from_fn(640, 480, |_, y| {
+            Luma([if (100..=104).contains(&y) { 255 } else { 0 }])
+        });
+        let truth = [[50.0, 13.0], [200.0, 102.0]];
+        let found = [[50.0, 33.0], [203.0, 106.0], [400.0, 110.0], [400.0, 300.0]];
+        let pairing = pair_points(&found, &truth, 15.0);
+        let m = misses(&found, &truth, &pairing, &cables);
         assert_eq!(
-            missed,
+            m.terminals,
             [MissedTerminal {
                 point: [50.0, 13.0],
                 nearest_end_px: Some(20.0),
                 border_px: 13.0,
             }]
         );
-        let alone = missed_terminals(&[], &truth[1..], &[false], 640, 480);
-        assert_eq!(alone[0].nearest_end_px, None);
-        assert_eq!(alone[0].border_px, 100.0);
+        let near: Vec<_> = m
+            .ends
+            .iter()
+            .map(|e| (e.point, e.nearest_cable_px))
+            .collect();
+        assert_eq!(
+            near,
+            [
+                ([50.0, 33.0], None),
+                ([400.0, 110.0], Some(6.0)),
+                ([400.0, 300.0], None),
+            ]
+        );
+        assert_eq!(m.ends[0].nearest_terminal_px, Some(20.0));
+        let none = misses(
+            &[],
+            &truth[1..],
+            &pair_points(&[], &truth[1..], 15.0),
+            &cables,
+        );
+        assert_eq!(none.terminals[0].nearest_end_px, None);
+        assert!(none.ends.is_empty());
     }
 
     #[test]

@@ -7,8 +7,7 @@ mod view;
 
 pub use dataset::{DatasetError, Sample, default_dataset_dir, load_dataset, terminal_ends};
 pub use metrics::{
-    MissedTerminal, SetSummary, iou, match_cables, match_points, matched_truth, missed_terminals,
-    summarise,
+    FalseEnd, MissedTerminal, SetSummary, iou, match_cables, match_points, summarise,
 };
 pub use view::{Camera, View};
 
@@ -53,8 +52,10 @@ pub struct ImageResult {
     /// Ends within [`TERMINAL_MATCH_PX`] (times the scale and zoom) of a true terminal,
     /// one-to-one.
     pub terminals_matched: usize,
-    /// The true terminals left unmatched, with the nearest end and border.
+    /// The true terminals left unpaired, with the nearest end and border.
     pub missed_terminals: Vec<MissedTerminal>,
+    /// The ends left unpaired, with the nearest terminal, annotated cable and border.
+    pub false_ends: Vec<FalseEnd>,
     /// Milliseconds per stage (no encoding: the mask is scored directly; `total` is
     /// the pipeline's time).
     pub timings_ms: Timings,
@@ -115,11 +116,12 @@ pub fn evaluate_sample(
         .map(|c| render::cable_mask(c, w, h, seg.mask_width(params.mask_width_px)))
         .collect();
     let (matched_cables, matched_iou_sum) = match_cables(&found, &view.cable_masks, MATCH_IOU);
-    let matched = matched_truth(
+    let pairing = metrics::pair_points(
         &out.ends.points,
         terminals,
         TERMINAL_MATCH_PX * setup.camera.scale * setup.camera.zoom,
     );
+    let unpaired = metrics::misses(&out.ends.points, terminals, &pairing, &view.mask_all);
     Ok(ImageResult {
         set: sample.set.clone(),
         name: sample.name.clone(),
@@ -133,8 +135,9 @@ pub fn evaluate_sample(
         iou: iou(pred, &view.mask_all),
         ends: out.ends.points.len(),
         terminals: terminals.len(),
-        terminals_matched: matched.iter().filter(|&&m| m).count(),
-        missed_terminals: missed_terminals(&out.ends.points, terminals, &matched, w, h),
+        terminals_matched: pairing.truth.iter().filter(|&&m| m).count(),
+        missed_terminals: unpaired.terminals,
+        false_ends: unpaired.ends,
         timings_ms: out.timings,
     })
 }
