@@ -185,16 +185,62 @@ mod tests {
         let width = crate::engine::Params::default().mask_width_px;
         for sample in samples.iter().step_by(5) {
             let gt = sample.mask_all().unwrap();
-            let mut drawn = GrayImage::new(gt.width(), gt.height());
-            for c in &sample.cables {
-                let line = crate::engine::spline::resample(c, 1.0);
-                render::stroke(&line, width, gt.width(), gt.height(), |x, y| {
-                    drawn.put_pixel(x, y, Luma([255]))
-                });
-            }
-            let v = iou(&drawn, &gt);
+            let v = iou(&true_centrelines_drawn(sample, 1.0, width), &gt);
             eprintln!("{} {} {v:.3}", sample.set, sample.name);
             assert!(v > 0.7, "{}/{}: IoU {v}", sample.set, sample.name);
+        }
+    }
+
+    /// The sample's true centrelines as a camera of `scale` sees them (pixel centres
+    /// mapped as the view maps terminals), drawn `width` × `scale` wide.
+    fn true_centrelines_drawn(sample: &Sample, scale: f64, width: f32) -> GrayImage {
+        let (w, h) = sample.mask_all().unwrap().dimensions();
+        let size = |n: u32| (n as f64 * scale).round() as u32;
+        let mut drawn = GrayImage::new(size(w), size(h));
+        let s = scale as f32;
+        for c in &sample.cables {
+            let scaled: Vec<[f32; 2]> = c
+                .iter()
+                .map(|p| [(p[0] + 0.5) * s - 0.5, (p[1] + 0.5) * s - 0.5])
+                .collect();
+            let line = crate::engine::spline::resample(&scaled, 1.0);
+            render::stroke(&line, width * s, size(w), size(h), |x, y| {
+                drawn.put_pixel(x, y, Luma([255]))
+            });
+        }
+        drawn
+    }
+
+    #[test]
+    fn another_camera_scales_masks_and_centrelines_together() {
+        // The yardstick of `eval --scale`: the true centrelines, scaled as the view
+        // scales terminals, must still fit the resized masks. Resampling the masks
+        // costs a little (0.785 at 1x, 0.774 at 2x, 0.772 at 3x on all of simple/).
+        let samples = load_dataset(&default_dataset_dir()).expect("dataset (set ARIADNE_DATASET)");
+        let width = crate::engine::Params::default().mask_width_px;
+        let fit = |scale: f64| {
+            let camera = Camera {
+                scale,
+                ..Camera::default()
+            };
+            let picked: Vec<&Sample> = samples.iter().step_by(4).collect();
+            picked
+                .iter()
+                .map(|s| {
+                    let view = View::of(s, camera).unwrap();
+                    iou(&true_centrelines_drawn(s, scale, width), &view.mask_all)
+                })
+                .sum::<f64>()
+                / picked.len() as f64
+        };
+        let at_1 = fit(1.0);
+        for scale in [0.5, 2.0] {
+            let v = fit(scale);
+            eprintln!("scale {scale}: {v:.3} (1x: {at_1:.3})");
+            assert!(
+                (v - at_1).abs() < 0.03,
+                "scale {scale}: {v:.3} against {at_1:.3} at 1x"
+            );
         }
     }
 }
