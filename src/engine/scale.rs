@@ -269,8 +269,9 @@ mod tests {
         assert_eq!(WorkingFrame::choose(320, 240, &p).working, [640, 480]);
         assert!(WorkingFrame::choose(320, 240, &p).enlarges());
         assert!(!big.enlarges() && !vga.enlarges());
-        assert_eq!(WorkingFrame::choose(100, 100, &p).working, [200, 200]);
-        assert_eq!(WorkingFrame::choose(10, 10, &p).working, [20, 20]);
+        assert_eq!(WorkingFrame::choose(160, 120, &p).working, [640, 480]);
+        assert_eq!(WorkingFrame::choose(100, 100, &p).working, [400, 400]);
+        assert_eq!(WorkingFrame::choose(10, 10, &p).working, [40, 40]);
     }
 
     #[test]

@@ -42,7 +42,8 @@ pub struct Params {
     /// Pixels of the image the engine works on: photos of another size are resampled
     /// to about this many (640x480 = 307,200, the size the lengths below suit).
     pub working_pixels: u32,
-    /// Largest enlargement of a small photo to reach `working_pixels`.
+    /// Largest enlargement of a small photo to reach `working_pixels` (4: a 160x120
+    /// photo is worked on at 640x480; a thin cable's correction is capped by it too).
     pub max_upscale: f32,
     /// Cable width the lengths suit, working pixels (the median measured on the
     /// development photos at 640x480).
@@ -257,7 +258,7 @@ impl Default for Params {
             exposure_level: 230.0,
             exposure_max_gain: 4.0,
             working_pixels: 307_200,
-            max_upscale: 2.0,
+            max_upscale: 4.0,
             nominal_width_px: 8.5,
             width_tolerance: 1.4,
             hist_bins: 4,
