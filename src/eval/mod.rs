@@ -215,7 +215,7 @@ mod tests {
     fn another_camera_scales_masks_and_centrelines_together() {
         // The yardstick of `eval --scale`: the true centrelines, scaled as the view
         // scales terminals, must still fit the resized masks. Resampling the masks
-        // costs a little (0.785 at 1x, 0.774 at 2x, 0.772 at 3x on all of simple/).
+        // costs a little (0.789 at 1x, 0.776 at 2x, 0.774 at 0.5x).
         let samples = load_dataset(&default_dataset_dir()).expect("dataset (set ARIADNE_DATASET)");
         let width = crate::engine::Params::default().mask_width_px;
         let fit = |scale: f64| {
