@@ -104,6 +104,18 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     }
     let decode_ms = ms(t);
     let frame = WorkingFrame::choose(width, height, job.params);
+    let [working_width, working_height] = frame.working;
+    if working_width.min(working_height) < engine::MIN_SIDE {
+        return Err(EngineError::PhotoTooSmall {
+            width,
+            height,
+            working_width,
+            working_height,
+            max_upscale: job.params.max_upscale,
+            min: engine::MIN_SIDE,
+        }
+        .into());
+    }
     let mut pass = Pass::run(job, &photo, frame)?;
     // Cables far wider or thinner than the engine's lengths suit (a closer or farther
     // camera): once more at the scale that makes them nominal (README, "Any camera").
@@ -297,6 +309,44 @@ mod tests {
         // A zero-sized picture: the PNG encoder refuses it.
         let err = png_bytes(&[], 0, 0, ExtendedColorType::L8).unwrap_err();
         assert!(matches!(err, PipelineError::Encode(_)), "{err}");
+    }
+
+    #[test]
+    fn a_photo_too_small_to_enlarge_enough_is_refused_in_its_own_size() {
+        let params = Params::default();
+        let run_on = |bytes: &[u8]| {
+            run(&Job {
+                bytes,
+                ends: Some(&[]),
+                network: None,
+                params: &params,
+                max_pixels: u64::MAX,
+                mask: MaskKind::Binary,
+                overlay: false,
+                encode: true,
+                deadline: Deadline::NONE,
+                overlap: false,
+            })
+        };
+        let tiny = rgb_png(&RgbImage::from_pixel(3, 40, image::Rgb([200, 200, 200]))).unwrap();
+        let err = run_on(&tiny).unwrap_err();
+        let message = err.to_string();
+        assert!(
+            matches!(
+                err,
+                PipelineError::Engine(EngineError::PhotoTooSmall {
+                    width: 3,
+                    height: 40,
+                    ..
+                })
+            ),
+            "{message}"
+        );
+        assert!(message.starts_with("photo 3x40 is too small"), "{message}");
+        // Four pixels a side reach the engine's sixteen.
+        let small = rgb_png(&RgbImage::from_pixel(4, 4, image::Rgb([200, 200, 200]))).unwrap();
+        let out = run_on(&small);
+        assert!(out.is_ok(), "{:?}", out.err());
     }
 
     #[test]

@@ -76,6 +76,25 @@ pub enum EngineError {
         /// Smallest accepted side, pixels.
         min: u32,
     },
+    /// The photo is too small even at the largest enlargement the parameters allow.
+    #[error(
+        "photo {width}x{height} is too small: enlarged as far as allowed (max_upscale {max_upscale}) \
+         it is {working_width}x{working_height} pixels, and at least {min}x{min} are needed"
+    )]
+    PhotoTooSmall {
+        /// Photo width, pixels.
+        width: u32,
+        /// Photo height, pixels.
+        height: u32,
+        /// Width it would be segmented at, pixels.
+        working_width: u32,
+        /// Height it would be segmented at, pixels.
+        working_height: u32,
+        /// The largest enlargement allowed.
+        max_upscale: f32,
+        /// Smallest accepted side of the working image, pixels.
+        min: u32,
+    },
 }
 
 /// A number as a person reads it in a message: plain when moderate, in scientific

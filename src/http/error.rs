@@ -271,7 +271,9 @@ impl From<EngineError> for ApiError {
             EngineError::EndpointOutside { .. } | EngineError::EndpointNotFinite { .. } => {
                 ErrorCode::EndpointOutsideImage
             }
-            EngineError::ImageTooSmall { .. } => ErrorCode::ImageTooSmall,
+            EngineError::ImageTooSmall { .. } | EngineError::PhotoTooSmall { .. } => {
+                ErrorCode::ImageTooSmall
+            }
             // The service maps a passed deadline itself (it knows the configured one).
             EngineError::BadConfidences { .. }
             | EngineError::OtherImage { .. }
