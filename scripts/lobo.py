@@ -43,14 +43,14 @@ def summarise(images):
     }
 
 
-# A missed terminal with an end this near was marked elsewhere on the same terminal
-# (metal tip against insulation end); one this near the border, with no end near, is
-# likely an annotated end short of the frame where the cable leaves it.
+# A missed terminal with an end this near (or a false end with a terminal this near)
+# was marked elsewhere on the same terminal (metal tip against insulation end); one
+# this near the border, with nothing near, is likely an annotated end short of the
+# frame where the cable leaves it; a false end this near an annotated cable's mask lies
+# on that cable.
 TERMINAL_MATCH_PX = 15.0  # ariadne eval's matching radius
 NEAR_END_PX = 30.0
 NEAR_FRAME_PX = 20.0
-
-
 ON_CABLE_PX = 10.0
 
 
