@@ -36,6 +36,10 @@ def summarise(images):
         / max(sum(i["terminals"] for i in images), 1),
         "terminal_precision": sum(i["terminals_matched"] for i in images)
         / max(sum(i["ends"] for i in images), 1),
+        "terminal_recall_on_cables": sum(i["terminals_matched_on_cables"] for i in images)
+        / max(sum(i["terminals"] for i in images), 1),
+        "terminal_precision_on_cables": sum(i["terminals_matched_on_cables"] for i in images)
+        / max(sum(i["ends_on_cables"] for i in images), 1),
         "terminals": sum(i["terminals"] for i in images),
         "misses": miss_kinds([m for i in images for m in i["missed_terminals"]]),
         "ends": sum(i["ends"] for i in images),
@@ -99,6 +103,11 @@ def main():
         print(f"| {g} | {r['images']} | {r['weighted_iou']:.3f} | {r['cable_recall']:.3f} "
               f"| {r['terminal_recall']:.3f} | {r['terminal_precision']:.3f} |")
     if args.endpoints == "detect":
+        print()
+        print("| held-out group | terminal recall, ends on a cable | terminal precision, ends on a cable |")
+        print("|---|---|---|")
+        for g, r in rows.items():
+            print(f"| {g} | {r['terminal_recall_on_cables']:.3f} | {r['terminal_precision_on_cables']:.3f} |")
         print()
         print(f"| held-out group | terminals | missed | an end {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away "
               f"| within {NEAR_FRAME_PX:g} px of the border, no end near | elsewhere |")

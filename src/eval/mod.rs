@@ -52,6 +52,10 @@ pub struct ImageResult {
     /// Ends within [`TERMINAL_MATCH_PX`] (times the scale and zoom) of a true terminal,
     /// one-to-one.
     pub terminals_matched: usize,
+    /// Ends that a cable was assigned to (the rest started no cable that was kept).
+    pub ends_on_cables: usize,
+    /// Of those, the ones paired with a true terminal as in `terminals_matched`.
+    pub terminals_matched_on_cables: usize,
     /// The true terminals left unpaired, with the nearest end and border.
     pub missed_terminals: Vec<MissedTerminal>,
     /// The ends left unpaired, with the nearest terminal, annotated cable and border.
@@ -116,12 +120,17 @@ pub fn evaluate_sample(
         .map(|c| render::cable_mask(c, w, h, seg.mask_width(params.mask_width_px)))
         .collect();
     let (matched_cables, matched_iou_sum) = match_cables(&found, &view.cable_masks, MATCH_IOU);
-    let pairing = metrics::pair_points(
-        &out.ends.points,
-        terminals,
-        TERMINAL_MATCH_PX * setup.camera.scale * setup.camera.zoom,
-    );
+    let radius = TERMINAL_MATCH_PX * setup.camera.scale * setup.camera.zoom;
+    let pairing = metrics::pair_points(&out.ends.points, terminals, radius);
     let unpaired = metrics::misses(&out.ends.points, terminals, &pairing, &view.mask_all);
+    let on_cables: Vec<[f64; 2]> = out
+        .ends
+        .points
+        .iter()
+        .zip(&seg.end_cables)
+        .filter(|(_, cable)| cable.is_some())
+        .map(|(p, _)| *p)
+        .collect();
     Ok(ImageResult {
         set: sample.set.clone(),
         name: sample.name.clone(),
@@ -136,6 +145,8 @@ pub fn evaluate_sample(
         ends: out.ends.points.len(),
         terminals: terminals.len(),
         terminals_matched: pairing.truth.iter().filter(|&&m| m).count(),
+        ends_on_cables: on_cables.len(),
+        terminals_matched_on_cables: match_points(&on_cables, terminals, radius),
         missed_terminals: unpaired.terminals,
         false_ends: unpaired.ends,
         timings_ms: out.timings,
