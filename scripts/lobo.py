@@ -79,6 +79,15 @@ def miss_kinds(missed):
             "elsewhere": len(missed) - len(near) - len(frame)}
 
 
+def table(headers, rows):
+    """Prints a Markdown table after a blank line."""
+    print()
+    print("| " + " | ".join(headers) + " |")
+    print("|" + "---|" * len(headers))
+    for row in rows:
+        print("| " + " | ".join(str(c) for c in row) + " |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--endpoints", default="detect", choices=["detect", "gt"])
@@ -97,34 +106,27 @@ def main():
         doc = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
         rows[group] = summarise([i for i in doc["images"] if group_of(i) == group])
     print(f"ends: {args.endpoints}")
-    print("| held-out group | images | weighted IoU | cable recall | terminal recall | terminal precision |")
-    print("|---|---|---|---|---|---|")
-    for g, r in rows.items():
-        print(f"| {g} | {r['images']} | {r['weighted_iou']:.3f} | {r['cable_recall']:.3f} "
-              f"| {r['terminal_recall']:.3f} | {r['terminal_precision']:.3f} |")
+    table(["held-out group", "images", "weighted IoU", "cable recall", "terminal recall",
+           "terminal precision"],
+          [[g, r["images"], f"{r['weighted_iou']:.3f}", f"{r['cable_recall']:.3f}",
+            f"{r['terminal_recall']:.3f}", f"{r['terminal_precision']:.3f}"]
+           for g, r in rows.items()])
     if args.endpoints == "detect":
-        print()
-        print("| held-out group | terminal recall, ends on a cable | terminal precision, ends on a cable |")
-        print("|---|---|---|")
-        for g, r in rows.items():
-            print(f"| {g} | {r['terminal_recall_on_cables']:.3f} | {r['terminal_precision_on_cables']:.3f} |")
-        print()
-        print(f"| held-out group | terminals | missed | an end {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away "
-              f"| within {NEAR_FRAME_PX:g} px of the border, no end near | elsewhere |")
-        print("|---|---|---|---|---|---|")
-        for g, r in rows.items():
-            m = r["misses"]
-            print(f"| {g} | {r['terminals']} | {m['all']} | {m['end_near']} | {m['at_frame']} "
-                  f"| {m['elsewhere']} |")
-        print()
-        print(f"| held-out group | ends | false | a terminal {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away "
-              f"| within {NEAR_FRAME_PX:g} px of the border | on an annotated cable (≤ {ON_CABLE_PX:g} px) "
-              f"| off the annotated cables |")
-        print("|---|---|---|---|---|---|---|")
-        for g, r in rows.items():
-            f = r["false"]
-            print(f"| {g} | {r['ends']} | {f['all']} | {f['terminal_near']} | {f['at_frame']} "
-                  f"| {f['on_cable']} | {f['off_cables']} |")
+        table(["held-out group", "terminal recall, ends on a cable",
+               "terminal precision, ends on a cable"],
+              [[g, f"{r['terminal_recall_on_cables']:.3f}",
+                f"{r['terminal_precision_on_cables']:.3f}"] for g, r in rows.items()])
+        table(["held-out group", "terminals", "missed",
+               f"an end {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away",
+               f"within {NEAR_FRAME_PX:g} px of the border, no end near", "elsewhere"],
+              [[g, r["terminals"], m["all"], m["end_near"], m["at_frame"], m["elsewhere"]]
+               for g, r in rows.items() for m in [r["misses"]]])
+        table(["held-out group", "ends", "false",
+               f"a terminal {TERMINAL_MATCH_PX:g}-{NEAR_END_PX:g} px away",
+               f"within {NEAR_FRAME_PX:g} px of the border",
+               f"on an annotated cable (≤ {ON_CABLE_PX:g} px)", "off the annotated cables"],
+              [[g, r["ends"], f["all"], f["terminal_near"], f["at_frame"], f["on_cable"],
+                f["off_cables"]] for g, r in rows.items() for f in [r["false"]]])
     json.dump(rows, sys.stderr)
 
 
