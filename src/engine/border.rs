@@ -8,7 +8,8 @@
 //! that no cable explains are seeds too ([`super::orphans`]): cables whose ends the
 //! network missed; a walk from one counts when it reaches another seed or the border.
 
-use super::cable::{Cable, Scene, model_cable};
+use super::cable::{Cable, Scene, model_cable, model_course};
+use super::chains::chain;
 use super::field::CableField;
 use super::geometry::{dist3, median};
 use super::graph::Graph;
@@ -53,12 +54,12 @@ pub(super) fn border_crossing_cables(
         None => (Evidence::Colour(graph), p.border_min_score),
     };
     let seeds = border_seeds(evidence, sp, &covered, p);
-    let mut found = cables_from(scene, &seeds, &covered, min_score)?;
+    let mut found = cables_from(scene, &seeds, &covered, min_score, false)?;
     if let Some(vertex_field) = terrain.field {
         cover(&mut covered, graph, &found.walks, &found.picked);
         let frame = (sp.step, [sp.width, sp.height]);
         let seeds = orphan_seeds(graph, vertex_field, &covered, frame, p);
-        let orphans = cables_from(scene, &seeds, &covered, min_score)?;
+        let orphans = cables_from(scene, &seeds, &covered, min_score, true)?;
         found.cables.extend(orphans.cables);
     }
     Ok(found.cables)
@@ -89,12 +90,15 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
-/// uncovered superpixels and score at least `min_score`.
+/// uncovered superpixels and score at least `min_score`; `chained`: seeds that are no
+/// cable's ends (the ends of the field's pieces), through which the cables found are
+/// chained into whole ones ([`chain`]).
 fn cables_from(
     scene: &Scene<'_>,
     seeds: &[Seed],
     covered: &[bool],
     min_score: f32,
+    chained: bool,
 ) -> Result<SeedCables, EngineError> {
     let (terrain, sp) = (scene.terrain, scene.sp);
     let p = terrain.params;
@@ -102,14 +106,16 @@ fn cables_from(
         return Ok(Default::default());
     }
     let min_length = p.border_min_steps * sp.step;
-    let crossing: Vec<Walk> = walk::walk_all(terrain, seeds)?
-        .into_iter()
+    let walks = walk::walk_all(terrain, seeds)?;
+    let crossing: Vec<Walk> = walks
+        .iter()
         .filter(|w| {
             let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
             matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
                 && w.length_px >= min_length
                 && (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
         })
+        .cloned()
         .collect();
     let confidence = vec![p.border_seed_confidence; seeds.len()];
     // Only such walks were kept, so every pairing ends on the border or a seed. These
@@ -123,9 +129,20 @@ fn cables_from(
         seeds,
         ..*scene
     };
-    let cables = picked
-        .iter()
-        .filter_map(|c| model_cable(&seed_scene, c))
+    let modelled: Vec<Cable> = if chained {
+        let centroid = |v: u32| terrain.graph.vertices[v as usize].centroid;
+        chain(&crossing, &picked, &walks, centroid, (p, floor))
+            .iter()
+            .filter_map(|course| model_course(&seed_scene, course))
+            .collect()
+    } else {
+        picked
+            .iter()
+            .filter_map(|c| model_cable(&seed_scene, c))
+            .collect()
+    };
+    let cables = modelled
+        .into_iter()
         .map(|mut cable| {
             cable.end_indices = [None, None];
             cable

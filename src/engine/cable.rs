@@ -3,6 +3,7 @@
 
 use image::RgbImage;
 
+use super::chains::Course;
 use super::field::CableField;
 use super::geometry::{border_exit, dist, heading, median, polyline_length};
 use super::graph::Graph;
@@ -55,37 +56,36 @@ pub(super) struct Scene<'a> {
 /// Builds the spline model of one chosen walk: data points from the walk, fit,
 /// refinement on the image, final fit and measurements.
 pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> {
+    model_course(scene, &Course::of(scene.walks, choice))
+}
+
+/// The spline model of a cable along `course` (see [`model_cable`]); `None` also when
+/// the course does not start at a seed.
+pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> {
+    let FarEnd::Seed(start_seed) = course.ends[0] else {
+        return None;
+    };
     let Scene {
-        walks,
         seeds,
         terrain,
         field,
         sp,
         image,
+        ..
     } = *scene;
     let Terrain {
         graph, lab, params, ..
     } = terrain;
-    let walk = &walks[choice.walk];
-    let start = seeds[choice.start].point;
+    let start = seeds[start_seed].point;
     let mut points = vec![start];
     let mut weights = vec![params.end_weight];
     points.extend(
-        walk.vertices[1..]
+        course.vertices[1..]
             .iter()
             .map(|&v| graph.vertices[v as usize].centroid),
     );
-    if let Some(j) = choice.joined {
-        let other = &walks[j];
-        points.extend(
-            other.vertices[1..]
-                .iter()
-                .rev()
-                .map(|&v| graph.vertices[v as usize].centroid),
-        );
-    }
     weights.resize(points.len(), 1.0);
-    let far_index = match choice.far {
+    let far_index = match course.ends[1] {
         FarEnd::Seed(t) => {
             let target = seeds[t].point;
             // Centroids next to the far end may lie beside or beyond it: the end is exact.
@@ -133,7 +133,7 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
             polyline = spline.sample(params.polyline_step_px);
         }
     }
-    let width_px = width.unwrap_or_else(|| fallback_width(walk, graph, sp));
+    let width_px = width.unwrap_or_else(|| fallback_width(&course.vertices, graph, sp));
     let length_px = polyline_length(&polyline);
     // With a field, the cable must lie on cable pixels: its score is scaled by the share
     // of its centreline that does, and a walk that wandered onto the background is dropped.
@@ -144,25 +144,24 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
     Some(Cable {
         id: 0,
         ends: [polyline[0], polyline[polyline.len() - 1]],
-        end_indices: [Some(choice.start), far_index],
+        end_indices: [Some(start_seed), far_index],
         color: median_rgb(image, &polyline),
         spline,
         polyline,
         length_px,
         width_px,
-        score: (choice.score * on_cable).clamp(0.0, 1.0),
+        score: (course.score * on_cable).clamp(0.0, 1.0),
     })
 }
 
 /// Cap of the fallback width, in superpixel steps (a merged superpixel can be large).
 const FALLBACK_MAX_STEPS: f32 = 2.0;
 
-/// Width from the walk's superpixels when the image could not be read: a superpixel on
+/// Width from the cable's superpixels when the image could not be read: a superpixel on
 /// a cable spans about its width, so the side of the mean superpixel's square.
-fn fallback_width(walk: &Walk, graph: &Graph, sp: &Superpixels) -> f32 {
-    let n = walk.vertices.len().max(1) as f32;
-    let area: f32 = walk
-        .vertices
+fn fallback_width(vertices: &[u32], graph: &Graph, sp: &Superpixels) -> f32 {
+    let n = vertices.len().max(1) as f32;
+    let area: f32 = vertices
         .iter()
         .map(|&v| graph.vertices[v as usize].pixels as f32)
         .sum::<f32>()

@@ -15,6 +15,7 @@
 
 mod border;
 mod cable;
+mod chains;
 pub mod color;
 pub mod connectivity;
 mod deadline;
