@@ -90,7 +90,8 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
-/// uncovered superpixels and score at least `min_score`; `chained`: seeds that are no
+/// uncovered superpixels, score at least `min_score` and read as a ridge, not a step
+/// between two backgrounds, along at least `min_ridge_share` of them; `chained`: seeds that are no
 /// cable's ends (the ends of the field's pieces), through which the cables found are
 /// chained into whole ones ([`chain`]).
 fn cables_from(
@@ -143,6 +144,7 @@ fn cables_from(
     };
     let cables = modelled
         .into_iter()
+        .filter(|c| c.ridge_share >= p.min_ridge_share)
         .map(|mut cable| {
             cable.end_indices = [None, None];
             cable

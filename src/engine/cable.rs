@@ -33,6 +33,10 @@ pub struct Cable {
     pub width_px: f32,
     /// Median sRGB colour along the centreline.
     pub color: [u8; 3],
+    /// Share of the profiles read across the centreline that show a cable rather than
+    /// a step between two backgrounds (`refine::Refined::ridge_share`; 1 when none
+    /// could be read).
+    pub ridge_share: f32,
     /// Confidence in 0..=1: the quality of the walk (colour agreement, smoothness,
     /// lateral contrast, mean cable probability; see `Walk::quality`) times a factor
     /// for how it ended (confirmed by the walk from the other end: 1; unconfirmed,
@@ -115,10 +119,12 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
     let mut spline = BSpline::fit(&points, &weights, params.knot_spacing_px, params.smoothing)?;
     let mut polyline = spline.sample(params.polyline_step_px);
     let mut width = None;
+    let mut ridge_share = None;
     if params.refine {
         for _ in 0..params.refine_passes {
             let refined = refine::refine(&polyline, lab, params);
             width = refined.width_px.or(width);
+            ridge_share = refined.ridge_share.or(ridge_share);
             let mut pts = refined.points;
             let mut w = vec![1.0; pts.len()];
             // The given ends stay where they were given.
@@ -150,6 +156,7 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
         polyline,
         length_px,
         width_px,
+        ridge_share: ridge_share.unwrap_or(1.0),
         score: (course.score * on_cable).clamp(0.0, 1.0),
     })
 }

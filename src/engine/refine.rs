@@ -27,6 +27,12 @@ pub struct Refined {
     pub points: Vec<[f32; 2]>,
     /// Median measured width, pixels, when enough profiles could be read.
     pub width_px: Option<f32>,
+    /// Share of the profiles showing anything that show a ridge (a cable: the two sides
+    /// alike, the middle unlike them) rather than a step between two backgrounds (the
+    /// edge of a board or a tray: the two sides differ more than anything between them
+    /// differs from both; [`step_not_ridge`]); `None` when fewer than three show
+    /// anything.
+    pub ridge_share: Option<f32>,
 }
 
 /// Bilinear Lab sample at (x, y); `None` outside the image.
@@ -93,6 +99,7 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         return Refined {
             points: line.to_vec(),
             width_px: None,
+            ridge_share: None,
         };
     };
     let radius = params.refine_radius_px;
@@ -105,6 +112,7 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     let steps = (radius / settings.step).round() as i32;
     let mut profile = Vec::with_capacity(2 * steps as usize + 1);
     let mut readings: Vec<(usize, Reading)> = Vec::new();
+    let (mut shown, mut steps_seen) = (0usize, 0usize);
     for i in (0..line.len()).step_by(params.refine_profile_stride.max(1) as usize) {
         let (p, nrm) = (line[i], normal[i]);
         profile.clear();
@@ -118,7 +126,14 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         if profile.len() != 2 * steps as usize + 1 {
             continue;
         }
-        if let Some(reading) = read_profile(&profile, cable, steps as usize, settings) {
+        let fg = foreground(&profile);
+        if let Some(step) =
+            step_not_ridge(&profile, &fg, steps as usize, settings.min_background_de)
+        {
+            shown += 1;
+            steps_seen += usize::from(step);
+        }
+        if let Some(reading) = read_profile(&profile, fg, cable, steps as usize, settings) {
             readings.push((i, reading));
         }
     }
@@ -135,10 +150,12 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     } else {
         None
     };
+    let ridge_share = (shown >= 3).then(|| 1.0 - steps_seen as f32 / shown as f32);
     if offsets.len() < 3 {
         return Refined {
             points: line.to_vec(),
             width_px,
+            ridge_share,
         };
     }
     let smooth = smooth_offsets(&offsets, line.len(), radius * 0.5);
@@ -148,7 +165,40 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         .zip(&smooth)
         .map(|((p, n), &d)| [p[0] + d * n[0], p[1] + d * n[1]])
         .collect();
-    Refined { points, width_px }
+    Refined {
+        points,
+        width_px,
+        ridge_share,
+    }
+}
+
+/// Each sample's contrast: its Lab distance to the nearer end of the profile.
+fn foreground(profile: &[[f32; 3]]) -> Vec<f32> {
+    let (left, right) = (profile[0], profile[profile.len() - 1]);
+    profile
+        .iter()
+        .map(|&s| dist3(s, left).min(dist3(s, right)))
+        .collect()
+}
+
+/// The highest contrast `fg` within half the reach of the profile's `centre`.
+fn central_peak(fg: &[f32], centre: usize) -> f32 {
+    let search = centre / 2;
+    fg[centre - search..=centre + search]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max)
+}
+
+/// Whether a profile (its contrasts `fg`, centred on `centre`) crosses a step between
+/// two backgrounds rather than a ridge: its two ends differ more than any sample of its
+/// middle half differs from the nearer end. Between two flat regions nothing can:
+/// every blend of them lies nearer one of them than they lie to each other. `None` when
+/// the profile shows nothing (ends and middle within `min_de` of each other).
+fn step_not_ridge(profile: &[[f32; 3]], fg: &[f32], centre: usize, min_de: f32) -> Option<bool> {
+    let across = dist3(profile[0], profile[profile.len() - 1]);
+    let peak = central_peak(fg, centre);
+    (across.max(peak) >= min_de).then_some(across >= peak)
 }
 
 /// One profile read: the cable's centre offset and width, pixels.
@@ -163,7 +213,8 @@ struct Reading {
     lit: Option<Across>,
 }
 
-/// Finds the cable across one profile, or `None` when the profile cannot be read.
+/// Finds the cable across one profile (its contrasts `fg`, [`foreground`]), or `None`
+/// when the profile cannot be read.
 ///
 /// Each sample's "foreground" is its Lab distance to the nearer of the two profile ends
 /// (the local background on either side). The cable is the run around the centre where
@@ -172,6 +223,7 @@ struct Reading {
 /// sub-pixel precision.
 fn read_profile(
     profile: &[[f32; 3]],
+    fg: Vec<f32>,
     cable: [f32; 3],
     centre: usize,
     settings: Profiles,
@@ -181,15 +233,8 @@ fn read_profile(
     if dist3(left_bg, cable) < min_de || dist3(right_bg, cable) < min_de {
         return None;
     }
-    let fg: Vec<f32> = profile
-        .iter()
-        .map(|&s| dist3(s, left_bg).min(dist3(s, right_bg)))
-        .collect();
     let search = centre / 2;
-    let peak = fg[centre - search..=centre + search]
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max);
+    let peak = central_peak(&fg, centre);
     if peak < min_de {
         return None;
     }
@@ -472,6 +517,23 @@ mod tests {
         }
         let w = r.width_px.unwrap();
         assert!((w - 8.0).abs() < 1.0, "width {w}");
+    }
+
+    #[test]
+    fn a_cable_reads_as_a_ridge_and_the_edge_of_a_board_as_a_step() {
+        let params = Params {
+            refine_radius_px: 10.0,
+            ..Params::default()
+        };
+        let along = |y: f32| (10..50).map(|x| [x as f32, y]).collect::<Vec<_>>();
+        let cable = refine(&along(20.5), &band(), &params);
+        assert_eq!(cable.ridge_share, Some(1.0));
+        // The table's lower half is a dark floor: the line runs along the step.
+        let board = table_with(|_, y| (y >= 20).then_some([70, 62, 55]));
+        let edge = refine(&along(19.5), &board, &params);
+        assert_eq!(edge.ridge_share, Some(0.0));
+        // A plain table shows nothing to read.
+        assert_eq!(refine(&along(19.5), &table(&[]), &params).ridge_share, None);
     }
 
     /// A pale table (rows 0..40) with horizontal bands: `(first row, last row, colour)`.

@@ -197,6 +197,11 @@ pub struct Params {
     /// Largest fraction of such a walk's superpixels that may belong to cables already
     /// found (a walk along one of them explains nothing new).
     pub border_max_covered: f32,
+    /// Least share of the profiles across such a cable (one with no given end) that
+    /// must read a ridge, a cable on its background, rather than a step between two
+    /// backgrounds (`refine::Refined::ridge_share`): the edge of a board or tray is
+    /// long, straight and unexplained, and a field may call it cable (0 keeps them).
+    pub min_ridge_share: f32,
 
     // --- the cable field (a network's cable probability and direction) ---
     /// Trust the cable field when one is given: it joins the step score, stops walks
@@ -312,6 +317,7 @@ impl Default for Params {
             border_min_score: 0.35,
             border_min_steps: 5.0,
             border_max_covered: 0.25,
+            min_ridge_share: 0.5,
             use_field: true,
             lateral_contrast: true,
             field_floor: 0.1,
