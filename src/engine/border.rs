@@ -90,10 +90,10 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
-/// uncovered superpixels, score at least `min_score` and read as a ridge, not a step
-/// between two backgrounds, along at least `min_ridge_share` of them; `chained`: seeds that are no
-/// cable's ends (the ends of the field's pieces), through which the cables found are
-/// chained into whole ones ([`chain`]).
+/// uncovered superpixels, score at least `min_score`, and read as a ridge rather than
+/// a step between two backgrounds across at least `min_ridge_share` of their profiles.
+/// With `chained`, the seeds are no cable's ends (the ends of the field's pieces), and
+/// the cables found are chained through them into whole ones ([`chain`]).
 fn cables_from(
     scene: &Scene<'_>,
     seeds: &[Seed],

@@ -51,12 +51,11 @@ impl Course {
     }
 }
 
-/// The courses of the `picked` pairings of `walks` (walks from seeds; `centroid` gives a
-/// superpixel's centroid), chained through
-/// the seeds where a walk of `links` (every walk from those seeds, however short or
-/// much over cables found: crossing one is what a link does) joins two of them (see the
-/// module docs); links scoring below `min_score` are not used. Each course starts at a
-/// seed.
+/// The courses of the `picked` pairings of `walks` (walks from seeds; `centroid` gives
+/// a superpixel's centroid), chained through the seeds where a walk of `links` joins
+/// two of them (see the module docs). `links` holds every walk from those seeds, however
+/// short or much over cables found, since crossing a found cable is what a link does;
+/// links scoring below `min_score` are not used. Each course starts at a seed.
 pub fn chain(
     walks: &[Walk],
     picked: &[Pairing],
