@@ -107,17 +107,25 @@ fn cables_from(
         return Ok(Default::default());
     }
     let min_length = p.border_min_steps * sp.step;
+    let crosses = |w: &Walk| {
+        let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
+        matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
+            && w.length_px >= min_length
+            && (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
+    };
     let walks = walk::walk_all(terrain, seeds)?;
-    let crossing: Vec<Walk> = walks
-        .iter()
-        .filter(|w| {
-            let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
-            matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
-                && w.length_px >= min_length
-                && (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
-        })
-        .cloned()
-        .collect();
+    // Chaining links pieces with any walk, so only then are all of them kept.
+    let (crossing, links): (Vec<Walk>, Vec<Walk>) = if chained {
+        (
+            walks.iter().filter(|w| crosses(w)).cloned().collect(),
+            walks,
+        )
+    } else {
+        (
+            walks.into_iter().filter(|w| crosses(w)).collect(),
+            Vec::new(),
+        )
+    };
     let confidence = vec![p.border_seed_confidence; seeds.len()];
     // Only such walks were kept, so every pairing ends on the border or a seed. These
     // seeds' floor rises above any cable's; a hypothesis below it could only have
@@ -132,7 +140,7 @@ fn cables_from(
     };
     let modelled: Vec<Cable> = if chained {
         let centroid = |v: u32| terrain.graph.vertices[v as usize].centroid;
-        chain(&crossing, &picked, &walks, centroid, (p, floor))
+        chain(&crossing, &picked, &links, centroid, (p, floor))
             .iter()
             .filter_map(|course| model_course(&seed_scene, course))
             .collect()

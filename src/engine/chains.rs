@@ -187,25 +187,22 @@ mod tests {
         let walks = [walk(0, &[0, 1, 2, 3], 1), walk(2, &[6, 7, 8, 9], 3)];
         let links = [walk(1, &[3, 4, 5, 6], 2)];
         let picked = [picked(0, 0, 1), picked(1, 2, 3)];
-        let courses = chain(
-            &walks,
-            &picked,
-            &links,
-            on_a_line,
-            (&Params::default(), 0.1),
-        );
+        let with_floor = |floor: f32| {
+            chain(
+                &walks,
+                &picked,
+                &links,
+                on_a_line,
+                (&Params::default(), floor),
+            )
+        };
+        let courses = with_floor(0.1);
         assert_eq!(courses.len(), 1);
         let c = &courses[0];
         assert_eq!(c.ends, [FarEnd::Seed(0), FarEnd::Seed(3)]);
         assert_eq!(c.vertices, (0..10).collect::<Vec<u32>>());
         // A link below the floor joins nothing.
-        let apart = chain(
-            &walks,
-            &picked,
-            &links,
-            on_a_line,
-            (&Params::default(), 1.1),
-        );
+        let apart = with_floor(1.1);
         assert_eq!(apart.len(), 2);
     }
 

@@ -126,14 +126,12 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         if profile.len() != 2 * steps as usize + 1 {
             continue;
         }
-        let fg = foreground(&profile);
-        if let Some(step) =
-            step_not_ridge(&profile, &fg, steps as usize, settings.min_background_de)
-        {
+        let contrast = Contrast::of(&profile, steps as usize);
+        if let Some(step) = step_not_ridge(&profile, &contrast, settings.min_background_de) {
             shown += 1;
             steps_seen += usize::from(step);
         }
-        if let Some(reading) = read_profile(&profile, fg, cable, steps as usize, settings) {
+        if let Some(reading) = read_profile(&profile, contrast, cable, steps as usize, settings) {
             readings.push((i, reading));
         }
     }
@@ -172,32 +170,39 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     }
 }
 
-/// Each sample's contrast: its Lab distance to the nearer end of the profile.
-fn foreground(profile: &[[f32; 3]]) -> Vec<f32> {
-    let (left, right) = (profile[0], profile[profile.len() - 1]);
-    profile
-        .iter()
-        .map(|&s| dist3(s, left).min(dist3(s, right)))
-        .collect()
+/// What one profile shows against its ends (the local background on either side).
+struct Contrast {
+    /// Each sample's Lab distance to the nearer end of the profile.
+    fg: Vec<f32>,
+    /// The highest of them within half the reach of the profile's centre.
+    peak: f32,
 }
 
-/// The highest contrast `fg` within half the reach of the profile's `centre`.
-fn central_peak(fg: &[f32], centre: usize) -> f32 {
-    let search = centre / 2;
-    fg[centre - search..=centre + search]
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max)
+impl Contrast {
+    /// The contrasts of `profile`, centred on sample `centre`.
+    fn of(profile: &[[f32; 3]], centre: usize) -> Self {
+        let (left, right) = (profile[0], profile[profile.len() - 1]);
+        let fg: Vec<f32> = profile
+            .iter()
+            .map(|&s| dist3(s, left).min(dist3(s, right)))
+            .collect();
+        let search = centre / 2;
+        let peak = fg[centre - search..=centre + search]
+            .iter()
+            .copied()
+            .fold(0.0f32, f32::max);
+        Self { fg, peak }
+    }
 }
 
-/// Whether a profile (its contrasts `fg`, centred on `centre`) crosses a step between
-/// two backgrounds rather than a ridge: its two ends differ more than any sample of its
-/// middle half differs from the nearer end. Between two flat regions nothing can:
-/// every blend of them lies nearer one of them than they lie to each other. `None` when
-/// the profile shows nothing (ends and middle within `min_de` of each other).
-fn step_not_ridge(profile: &[[f32; 3]], fg: &[f32], centre: usize, min_de: f32) -> Option<bool> {
+/// Whether a profile crosses a step between two backgrounds rather than a ridge: its
+/// two ends differ more than any sample of its middle half differs from the nearer end
+/// (`contrast.peak`). Between two flat regions nothing can: every blend of them lies
+/// nearer one of them than they lie to each other. `None` when the profile shows
+/// nothing (ends and middle within `min_de` of each other).
+fn step_not_ridge(profile: &[[f32; 3]], contrast: &Contrast, min_de: f32) -> Option<bool> {
     let across = dist3(profile[0], profile[profile.len() - 1]);
-    let peak = central_peak(fg, centre);
+    let peak = contrast.peak;
     (across.max(peak) >= min_de).then_some(across >= peak)
 }
 
@@ -213,8 +218,8 @@ struct Reading {
     lit: Option<Across>,
 }
 
-/// Finds the cable across one profile (its contrasts `fg`, [`foreground`]), or `None`
-/// when the profile cannot be read.
+/// Finds the cable across one profile (its [`Contrast`]), or `None` when the profile
+/// cannot be read.
 ///
 /// Each sample's "foreground" is its Lab distance to the nearer of the two profile ends
 /// (the local background on either side). The cable is the run around the centre where
@@ -223,7 +228,7 @@ struct Reading {
 /// sub-pixel precision.
 fn read_profile(
     profile: &[[f32; 3]],
-    fg: Vec<f32>,
+    Contrast { fg, peak }: Contrast,
     cable: [f32; 3],
     centre: usize,
     settings: Profiles,
@@ -234,7 +239,6 @@ fn read_profile(
         return None;
     }
     let search = centre / 2;
-    let peak = central_peak(&fg, centre);
     if peak < min_de {
         return None;
     }
