@@ -45,8 +45,10 @@ pub struct Params {
     /// Largest enlargement of a small photo to reach `working_pixels` (4: a 160x120
     /// photo is worked on at 640x480; a thin cable's correction is capped by it too).
     pub max_upscale: f32,
-    /// Cable width the lengths suit, working pixels (the median measured on the
-    /// development photos at 640x480).
+    /// Cable width the lengths suit, working pixels: the middle (geometric centre) of
+    /// the widths the engine reads on the development photos at 640x480, whose
+    /// per-photo estimates span 6.4-9.4 px (a full-width-at-half-maximum reading, a
+    /// little below the annotated strokes).
     pub nominal_width_px: f32,
     /// The photo is segmented again at a corrected scale when the median cable width
     /// is off nominal by more than this factor (a closer or farther camera).
@@ -264,7 +266,7 @@ impl Default for Params {
             exposure_max_gain: 4.0,
             working_pixels: 307_200,
             max_upscale: 4.0,
-            nominal_width_px: 8.5,
+            nominal_width_px: 7.8,
             width_tolerance: 1.4,
             hist_bins: 4,
             neighbourhood_order: 3,
