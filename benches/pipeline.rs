@@ -11,7 +11,7 @@ use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
-use ariadne_dlo::engine::{self, MaskKind, Params, exposure, render};
+use ariadne_dlo::engine::{self, MaskKind, Params, exposure, render, sharpness};
 use ariadne_dlo::pipeline;
 use ariadne_dlo::{decode, eval};
 
@@ -187,6 +187,22 @@ fn exposure_640x480(bencher: divan::Bencher) {
         let gain = exposure::gain(&dim, p.exposure_level, p.exposure_max_gain);
         exposure::apply(&dim, gain).into_owned()
     });
+}
+
+/// The sharpness reading of a development photo (sharp: it pays the reading alone).
+#[divan::bench(sample_count = 30)]
+fn sharpness_reading_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    bencher.bench_local(|| sharpness::edge_width(&fx[0].image));
+}
+
+/// The sharpness correction of a soft photo (blurred by 1.5 px): read and sharpened.
+#[divan::bench(sample_count = 30)]
+fn sharpen_soft_640x480(bencher: divan::Bencher) {
+    let fx = fixtures();
+    let p = Params::default();
+    let soft = sharpness::blurred(&fx[0].image, 1.5);
+    bencher.bench_local(|| sharpness::apply(&soft, &p).into_owned());
 }
 
 /// Lab conversion, blur and SLIC.

@@ -1,6 +1,7 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
 //! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
-//! resample to the working size, a dim photo brightened → network (ends and cable
+//! resample to the working size, a dim photo brightened and a soft one sharpened →
+//! network (ends and cable
 //! field) beside the engine's superpixels → the rest of the engine → cables back in
 //! the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
 //! [`Timings`].
@@ -21,7 +22,7 @@ use crate::decode::{self, DecodeError};
 use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{
     self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, exposure,
-    render,
+    render, sharpness,
 };
 use crate::timings::{Timings, ms_since as ms};
 
@@ -182,17 +183,19 @@ impl Pass {
         let t = Instant::now();
         let resampled = frame.resample(photo);
         // A dim photo is brightened, by one gain for the network's source and the
-        // engine's image (README, "Any camera").
+        // engine's image, and a soft one sharpened (README, "Any camera").
         let params = frame.params(job.params);
         let gain = exposure::gain(&resampled, params.exposure_level, params.exposure_max_gain);
-        let image = exposure::apply(&resampled, gain);
+        let lit = exposure::apply(&resampled, gain);
+        let image = sharpness::apply(&lit, &params);
         let resample_ms = ms(t);
         // An enlarged photo reaches the network from its own pixels: enlarging it and
         // shrinking it again into the network's input blurs what the network sees.
-        let lit_photo;
+        let (lit_photo, own);
         let source: &RgbImage = if frame.enlarges() {
             lit_photo = exposure::apply(photo, gain);
-            &lit_photo
+            own = sharpness::apply(&lit_photo, &params);
+            &own
         } else {
             &image
         };

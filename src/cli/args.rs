@@ -242,6 +242,10 @@ pub struct EvalArgs {
     /// photo), in (0, 1].
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f64,
+    /// Soften every photo: a Gaussian blur of this σ, pixels, over it (a lens out of
+    /// focus), in [0, 10].
+    #[arg(long, default_value_t = 0.0)]
+    pub blur: f64,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

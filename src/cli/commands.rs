@@ -112,6 +112,12 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             args.exposure
         )));
     }
+    if !(0.0..=10.0).contains(&args.blur) {
+        return Err(CliError::BadOptions(format!(
+            "--blur {}: expected a σ in [0, 10] pixels",
+            args.blur
+        )));
+    }
     let mut images = Vec::new();
     let mut scales = Vec::new();
     for &scale in &args.scale {
@@ -127,6 +133,7 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
                 scale,
                 zoom: args.zoom,
                 exposure: args.exposure,
+                blur: args.blur,
             },
         };
         let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;

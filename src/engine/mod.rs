@@ -8,7 +8,7 @@
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
-//! photo (the pipeline calls it); [`field`] reads a network's cable
+//! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
 //! stops walks that leave the cables, seeds cables at the border and scores each
 //! cable. [`segment`] runs them in order.
@@ -30,6 +30,7 @@ mod params;
 pub mod refine;
 pub mod render;
 mod scale;
+pub mod sharpness;
 pub mod spline;
 pub mod superpixels;
 pub mod walk;

@@ -35,6 +35,8 @@ pub struct ImageResult {
     pub zoom: f64,
     /// Factor the photo's pixel values were multiplied by.
     pub exposure: f64,
+    /// σ of the blur over the photo, pixels.
+    pub blur: f64,
     /// Cables in the ground truth.
     pub gt_cables: usize,
     /// Cables found.
@@ -137,6 +139,7 @@ pub fn evaluate_sample(
         scale: setup.camera.scale,
         zoom: setup.camera.zoom,
         exposure: setup.camera.exposure,
+        blur: setup.camera.blur,
         gt_cables: view.cable_masks.len(),
         found_cables: seg.cables.len(),
         matched_cables,

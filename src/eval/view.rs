@@ -1,7 +1,7 @@
 //! A sample as another camera would see it: of another resolution (the photo, its
 //! masks and its terminals resized together) or closer (the centre of the frame
 //! cropped and enlarged back to the frame's size, so cables look wider), or darker (an
-//! underexposed photo).
+//! underexposed photo), or softer (a lens out of focus).
 
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
@@ -19,6 +19,9 @@ pub struct Camera {
     /// Factor every pixel value is multiplied by: below 1 an underexposed photo (a dim
     /// cell, a short exposure); 1 keeps the photo's brightness.
     pub exposure: f64,
+    /// σ, pixels of the made photo, of a Gaussian blur over it (a soft lens); 0 keeps
+    /// it as sharp as it is.
+    pub blur: f64,
 }
 
 impl Default for Camera {
@@ -27,6 +30,7 @@ impl Default for Camera {
             scale: 1.0,
             zoom: 1.0,
             exposure: 1.0,
+            blur: 0.0,
         }
     }
 }
@@ -50,7 +54,7 @@ impl View {
     /// `sample` as `camera` sees it (the default camera: as it is, bytes untouched).
     /// The photo is enlarged with Catmull-Rom (sharp, as a finer sensor would see it)
     /// and shrunk with a triangle filter (averaging, as a coarser one would), then its
-    /// values are multiplied by the exposure factor; masks are
+    /// values are multiplied by the exposure factor and it is blurred; masks are
     /// resampled with a triangle filter and thresholded at half; a cable whose mask
     /// leaves the view is dropped from the truth.
     pub fn of(sample: &Sample, camera: Camera) -> Result<Self, DatasetError> {
@@ -91,6 +95,9 @@ impl View {
             for v in resized.iter_mut() {
                 *v = (f64::from(*v) * camera.exposure).round().min(255.0) as u8;
             }
+        }
+        if camera.blur > 0.0 {
+            resized = crate::engine::sharpness::blurred(&resized, camera.blur as f32);
         }
         let mut png = std::io::Cursor::new(Vec::new());
         resized

@@ -37,6 +37,12 @@ pub struct Params {
     pub exposure_level: f32,
     /// Largest gain applied for that; 1 leaves every photo as it is.
     pub exposure_max_gain: f32,
+    /// Edge width (`sharpness::edge_width`, pixels) of the photos the engine was tuned
+    /// on (the development photos read 1.02-1.09); a photo whose edges are much wider
+    /// (a soft lens) is sharpened by the difference (`sharpness`).
+    pub sharp_edge_px: f32,
+    /// Strength of that unsharp mask; 0 leaves every photo as it is.
+    pub sharpen_amount: f32,
 
     // --- working resolution (see `scale`) ---
     /// Pixels of the image the engine works on: photos of another size are resampled
@@ -264,6 +270,8 @@ impl Default for Params {
             min_size_factor: 0.25,
             exposure_level: 230.0,
             exposure_max_gain: 4.0,
+            sharp_edge_px: 1.05,
+            sharpen_amount: 1.5,
             working_pixels: 307_200,
             max_upscale: 4.0,
             nominal_width_px: 7.8,
@@ -360,7 +368,8 @@ impl Params {
 
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
-    /// refinement on the image, no seed regions, no brightening of a dim photo, masks as
+    /// refinement on the image, no seed regions, no brightening of a dim photo or sharpening
+    /// of a soft one, masks as
     /// wide as the walk's superpixels — with the paper's and its authors' code's
     /// constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on the newest turn, turns up to 90°,
     /// 100 steps). What the paper leaves open stays ours: the global pairing of ends
@@ -380,6 +389,7 @@ impl Params {
             mask_width_px: 0.0,
             seed_region_steps: 0.0,
             exposure_max_gain: 1.0,
+            sharpen_amount: 0.0,
             ..Self::default()
         }
     }

@@ -34,6 +34,8 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("min_size_factor", 0.0, 1.0),
     ("exposure_level", 1.0, 255.0),
     ("exposure_max_gain", 1.0, 16.0),
+    ("sharp_edge_px", 0.1, 10.0),
+    ("sharpen_amount", 0.0, 5.0),
     ("working_pixels", 20_000.0, 4_000_000.0),
     ("max_upscale", 1.0, 4.0),
     ("nominal_width_px", 1.0, 100.0),
