@@ -1,10 +1,9 @@
 //! One segmentation request from bytes to masks, the same for the service, the command
 //! line, the evaluator and the benchmarks: decode (upright, EXIF orientation applied) →
 //! resample to the working size, a dim photo brightened and a soft one sharpened →
-//! network (ends and cable
-//! field) beside the engine's superpixels → the rest of the engine → cables back in
-//! the photo's pixels → masks at the photo's size → PNG, timed stage by stage in one
-//! [`Timings`].
+//! network (ends and cable field) beside the engine's superpixels → the rest of the
+//! engine → cables back in the photo's pixels → masks at the photo's size → PNG, timed
+//! stage by stage in one [`Timings`].
 //!
 //! The network runs whenever there is one, also when the caller gives the ends: then
 //! its ends are ignored but its cable field still guides the walks. It needs no
