@@ -139,7 +139,8 @@ impl LabImage {
     }
 }
 
-fn gaussian_kernel(sigma: f32) -> Vec<f32> {
+/// A normalised Gaussian kernel of standard deviation `sigma` pixels, radius ceil(3 sigma).
+pub(crate) fn gaussian_kernel(sigma: f32) -> Vec<f32> {
     let radius = (3.0 * sigma).ceil() as i32;
     let mut k: Vec<f32> = (-radius..=radius)
         .map(|i| (-(i * i) as f32 / (2.0 * sigma * sigma)).exp())
@@ -152,7 +153,13 @@ fn gaussian_kernel(sigma: f32) -> Vec<f32> {
 /// Horizontal pass into `scratch`, vertical pass back into `plane`. Each pass adds one
 /// kernel tap over a whole row at a time (edge-clamped via a padded row), so the inner
 /// loops are plain slice arithmetic the compiler vectorises.
-fn blur_plane(plane: &mut [f32], scratch: &mut [f32], w: usize, h: usize, kernel: &[f32]) {
+pub(crate) fn blur_plane(
+    plane: &mut [f32],
+    scratch: &mut [f32],
+    w: usize,
+    h: usize,
+    kernel: &[f32],
+) {
     let r = kernel.len() / 2;
     let mut padded = vec![0.0; w + 2 * r];
     for y in 0..h {

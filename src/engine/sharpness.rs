@@ -14,6 +14,7 @@ use std::borrow::Cow;
 use image::RgbImage;
 
 use super::Params;
+use super::color::{blur_plane, gaussian_kernel};
 
 /// A photo is sharpened when its edges are wider than `sharp_edge_px` by more than
 /// this factor. The development photos read 1.02-1.09 px against 1.05; the same
@@ -94,15 +95,16 @@ pub fn edge_width(image: &RgbImage) -> Option<f32> {
 /// its Gaussian blur of `sigma` pixels, clipped to 0..=255.
 pub fn sharpen(image: &RgbImage, sigma: f32, amount: f32) -> RgbImage {
     let (w, h) = (image.width() as usize, image.height() as usize);
-    let kernel = gaussian(sigma);
+    let kernel = gaussian_kernel(sigma);
     let mut out = image.clone();
-    let mut plane = vec![0.0f32; w * h];
+    let (mut blurred, mut scratch) = (vec![0.0f32; w * h], vec![0.0f32; w * h]);
     for c in 0..3 {
-        for (v, p) in plane.iter_mut().zip(image.pixels()) {
+        for (v, p) in blurred.iter_mut().zip(image.pixels()) {
             *v = f32::from(p.0[c]);
         }
-        let blurred = blur_plane(&plane, w, h, &kernel);
-        for ((p, v), b) in out.pixels_mut().zip(&plane).zip(&blurred) {
+        blur_plane(&mut blurred, &mut scratch, w, h, &kernel);
+        for (p, b) in out.pixels_mut().zip(&blurred) {
+            let v = f32::from(p.0[c]);
             p.0[c] = (v + amount * (v - b)).round().clamp(0.0, 255.0) as u8;
         }
     }
@@ -113,46 +115,6 @@ pub fn sharpen(image: &RgbImage, sigma: f32, amount: f32) -> RgbImage {
 /// amount −1.
 pub fn blurred(image: &RgbImage, sigma: f32) -> RgbImage {
     sharpen(image, sigma, -1.0)
-}
-
-/// A normalised Gaussian kernel of `sigma` pixels, 3σ to either side.
-fn gaussian(sigma: f32) -> Vec<f32> {
-    let radius = (3.0 * sigma).ceil().max(1.0) as i32;
-    let k: Vec<f32> = (-radius..=radius)
-        .map(|d| (-(d * d) as f32 / (2.0 * sigma * sigma)).exp())
-        .collect();
-    let sum: f32 = k.iter().sum();
-    k.into_iter().map(|v| v / sum).collect()
-}
-
-/// A `w` x `h` plane blurred by `kernel` along rows, then along columns (whole rows
-/// at a time), its edges extended.
-fn blur_plane(plane: &[f32], w: usize, h: usize, kernel: &[f32]) -> Vec<f32> {
-    let radius = kernel.len() / 2;
-    let mut rows = vec![0.0f32; w * h];
-    let mut padded = vec![0.0f32; w + 2 * radius];
-    for (src, dst) in plane.chunks_exact(w).zip(rows.chunks_exact_mut(w)) {
-        padded[..radius].fill(src[0]);
-        padded[radius..radius + w].copy_from_slice(src);
-        padded[radius + w..].fill(src[w - 1]);
-        for (x, d) in dst.iter_mut().enumerate() {
-            *d = padded[x..x + kernel.len()]
-                .iter()
-                .zip(kernel)
-                .map(|(v, k)| v * k)
-                .sum();
-        }
-    }
-    let mut out = vec![0.0f32; w * h];
-    for (y, dst) in out.chunks_exact_mut(w).enumerate() {
-        for (t, k) in kernel.iter().enumerate() {
-            let sy = (y + t).saturating_sub(radius).min(h - 1);
-            for (d, v) in dst.iter_mut().zip(&rows[sy * w..(sy + 1) * w]) {
-                *d += k * v;
-            }
-        }
-    }
-    out
 }
 
 /// `image` sharpened by what its edges lack against `params.sharp_edge_px` when it is
