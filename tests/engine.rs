@@ -228,13 +228,21 @@ fn an_exact_field_recovers_the_hard_cases() {
 /// Segments the synthetic scene `s` from `ends` (trusted fully) and its exact field:
 /// the number of cables found, and each true cable's centreline error to the nearest.
 fn with_exact_field(s: &ariadne_dlo::synth::Scene, ends: &[[f64; 2]]) -> (usize, Vec<f32>) {
-    let field = field_from_mask(&s.mask);
+    with_field(s, ends, &field_from_mask(&s.mask))
+}
+
+/// [`with_exact_field`] with the given `field`.
+fn with_field(
+    s: &ariadne_dlo::synth::Scene,
+    ends: &[[f64; 2]],
+    field: &engine::CableField,
+) -> (usize, Vec<f32>) {
     let confidences = vec![1.0; ends.len()];
     let seg = engine::segment_with_confidence(
         &s.image,
         ends,
         &confidences,
-        Some(&field),
+        Some(field),
         &Params::default(),
         engine::Deadline::NONE,
     )
@@ -267,4 +275,33 @@ fn cables_whose_ends_were_missed_are_found_from_the_field() {
         assert_eq!(found, s.cables.len(), "{case:?}");
         assert!(err.iter().all(|&e| e < 3.0), "{case:?}: {err:?}");
     }
+}
+
+/// A strip of table below the board's bottom edge, dark and half the frame long, that
+/// the field calls cable in patches (as a network does: it is long, thin and unlike the
+/// board), is not reported: it lies all along one side of the frame, where its profiles
+/// cannot be read. The scene's cables still are.
+#[test]
+fn a_strip_along_the_frame_edge_is_not_a_cable() {
+    let mut s = ariadne_dlo::synth::case(ariadne_dlo::synth::Case::SideBySide);
+    let h = s.image.height();
+    let strip = 160..480;
+    for y in h - 12..h {
+        for x in strip.clone() {
+            s.image.put_pixel(x, y, image::Rgb([70, 60, 55]));
+        }
+    }
+    // The field along the strip: fair one cell row up from the edge; on the edge's
+    // row, under `field_level` but for two short runs at the strip's ends, which the
+    // border reads as two crossings.
+    let mut field = field_from_mask(&s.mask);
+    let (last, gw) = ((field.height - 1) * field.width, field.width);
+    for cx in (strip.start / 8..strip.end / 8).map(|c| c as usize) {
+        let run = cx < strip.start as usize / 8 + 3 || cx >= strip.end as usize / 8 - 3;
+        field.cable[last + cx] = if run { 0.4 } else { 0.2 };
+        field.cable[last - gw + cx] = 0.5;
+    }
+    let (found, err) = with_field(&s, &s.terminals(), &field);
+    assert_eq!(found, s.cables.len());
+    assert!(err.iter().all(|&e| e < 3.0), "{err:?}");
 }

@@ -418,7 +418,8 @@ def composite(p: Photo, rng: random.Random) -> Scene:
     if rng.random() < 0.3:
         cables = np.clip(cables * rng.uniform(0.3, 1.2), 0, 255)
     base = None
-    if rng.random() < CAMOUFLAGE:  # the background wears one cable's colour
+    # (no draw when off, so the recipe's scenes stay those the bundled model saw)
+    if CAMOUFLAGE > 0 and rng.random() < CAMOUFLAGE:  # the background wears a cable's colour
         base = near_colour(rng, colour_along(cables, rng.choice(p.lines)))
     rgb = cables * a + background(rng, base=base) * (1 - a)
     return Scene(rgb, p.mask.copy(), [l.copy() for l in p.lines], list(p.ends))
@@ -505,7 +506,8 @@ def sample_scene(photos: list[Photo], rng: random.Random, real=0.25, composed=0.
             add_cables(scene, rng, rng.randrange(1, 3))
     else:
         scene = Scene(background(rng), np.zeros((IN_H, IN_W), np.float32))
-        add_cables(scene, rng, rng.randrange(1, 7), camouflage=rng.random() < CAMOUFLAGE)
+        hidden = CAMOUFLAGE > 0 and rng.random() < CAMOUFLAGE
+        add_cables(scene, rng, rng.randrange(1, 7), camouflage=hidden)
         scene.rgb = np.clip(scene.rgb, 0, 255)
     scene = affine(scene, rng)
     scene.rgb = photometric(scene.rgb, rng)

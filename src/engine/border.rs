@@ -11,7 +11,7 @@
 use super::cable::{Cable, Scene, model_cable, model_course};
 use super::chains::chain;
 use super::field::CableField;
-use super::geometry::{dist3, median};
+use super::geometry::{along_one_side, dist3, median};
 use super::graph::Graph;
 use super::orphans::orphan_seeds;
 use super::pairing::{self, Pairing};
@@ -90,8 +90,12 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
-/// uncovered superpixels, score at least `min_score`, and read as a ridge rather than
-/// a step between two backgrounds across at least `min_ridge_share` of their profiles.
+/// uncovered superpixels, score at least `min_score`, read as a ridge rather than a
+/// step between two backgrounds across at least `min_ridge_share` of their profiles,
+/// and do not lie all along one side of the frame, within `border_margin_px` of it: the
+/// frame cuts whatever runs there (a board's edge, a tray's rim, a strip of table), so
+/// its profiles cannot be read, and a cable that close along a whole side would be
+/// mostly out of view.
 /// With `chained`, the seeds are no cable's ends (the ends of the field's pieces), and
 /// the cables found are chained through them into whole ones ([`chain`]).
 fn cables_from(
@@ -153,6 +157,7 @@ fn cables_from(
     let cables = modelled
         .into_iter()
         .filter(|c| c.ridge_share >= p.min_ridge_share)
+        .filter(|c| !along_one_side(&c.polyline, sp.width, sp.height, p.border_margin_px))
         .map(|mut cable| {
             cable.end_indices = [None, None];
             cable

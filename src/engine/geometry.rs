@@ -90,6 +90,15 @@ pub fn border_exit(
     (t.is_finite() && t > 0.5 && t <= max_px).then(|| [from[0] + t * dir[0], from[1] + t * dir[1]])
 }
 
+/// True when every point of `line` lies within `margin` of one and the same side of a
+/// `width` x `height` image (false for an empty line).
+pub fn along_one_side(line: &[[f32; 2]], width: usize, height: usize, margin: f32) -> bool {
+    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
+    // A point's distances to the left, top, right and bottom sides.
+    let insets = |p: [f32; 2]| [p[0], p[1], w - p[0], h - p[1]];
+    !line.is_empty() && (0..4).any(|side| line.iter().all(|&p| insets(p)[side] <= margin))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -115,5 +124,22 @@ mod tests {
         );
         assert_eq!(border_exit([5.0, 5.0], [1.0, 0.0], 10, 10, 2.0), None);
         assert!((polyline_length(&[[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]]) - 6.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn lines_along_one_side() {
+        // 100x50: the last pixel centres are x = 99 and y = 49.
+        let bottom = [[10.0, 45.0], [50.0, 48.0], [90.0, 44.0]];
+        assert!(along_one_side(&bottom, 100, 50, 5.0));
+        assert!(!along_one_side(&bottom, 100, 50, 4.0));
+        // Near the top at one end and the bottom at the other: no one side.
+        assert!(!along_one_side(
+            &[[1.0, 1.0], [1.0, 48.0], [98.0, 48.0]],
+            100,
+            50,
+            5.0
+        ));
+        assert!(along_one_side(&[[1.0, 1.0], [1.0, 48.0]], 100, 50, 5.0));
+        assert!(!along_one_side(&[], 100, 50, 5.0));
     }
 }
