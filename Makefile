@@ -1,5 +1,5 @@
 # The two commands: `make run` serves on the bundled defaults; `make test` runs everything.
-.PHONY: setup run test lint bench eval eval-detect lobo train-field openapi deploy-check browser-test
+.PHONY: setup run test lint bench eval eval-detect lobo train-field scene-check openapi deploy-check browser-test
 
 # ONNX Runtime's shared library, from the PyPI wheel, into .ort/ (idempotent).
 setup:
@@ -43,6 +43,10 @@ lobo: setup
 # The bundled model (about 15-20 minutes on 2 cores); see models/README.md.
 train-field:
 	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 2000 --out models/cable_field.onnx
+
+# The training scenes are still those the bundled model saw (models/README.md).
+scene-check:
+	test "$$(training/.venv/bin/python training/train_field.py --scene-hash 4 | tail -1)" = "scenes e558852d9fd235a876ad5551ce8b4de9"
 
 # hadolint, kubernetes-validate --strict, kubectl kustomize (offline checks).
 deploy-check:

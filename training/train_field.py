@@ -30,6 +30,7 @@ to measure what each adds.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import math
 import os
@@ -113,9 +114,25 @@ class SceneStream(torch.utils.data.IterableDataset):
 
     def __iter__(self):
         info = torch.utils.data.get_worker_info()
-        rng = random.Random(self.args.seed * 1000 + (info.id if info else 0))
+        rng = scene_rng(self.args, info.id if info else 0)
         while True:
             yield batch(self.photos, rng, self.args.batch, self.args)
+
+
+def scene_rng(args, worker: int) -> random.Random:
+    """The random stream of one scene-making worker."""
+    return random.Random(args.seed * 1000 + worker)
+
+
+def scene_hash(photos, args) -> str:
+    """MD5 of the first `args.scene_hash` batches (images and targets) the first worker
+    makes: equal hashes mean a checkout makes the scenes a model was trained on."""
+    rng, digest = scene_rng(args, 0), hashlib.md5()
+    for _ in range(args.scene_hash):
+        x, t = batch(photos, rng, args.batch, args)
+        for a in [x, *t]:
+            digest.update(a.numpy().tobytes())
+    return digest.hexdigest()
 
 
 def to_tensor(rgb: np.ndarray) -> np.ndarray:
@@ -249,6 +266,8 @@ def main():
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
     ap.add_argument("--workers", type=int, default=1, help="processes making scenes")
     ap.add_argument("--out", default="models/cable_field.onnx")
+    ap.add_argument("--scene-hash", type=int, default=0, metavar="N",
+                    help="print the MD5 of the first N training batches and stop")
     args = ap.parse_args()
 
     scenes.RICH_TEXTURES = args.rich_textures
@@ -264,6 +283,9 @@ def main():
     train = [p for p in photos if p.group != args.holdout]
     held = [p for p in photos if p.group == args.holdout]
     print(f"train {len(train)} photos; held out ({args.holdout}): {len(held)}", flush=True)
+    if args.scene_hash:
+        print(f"scenes {scene_hash(train, args)}", flush=True)
+        return
 
     if args.backbone == "lite0":
         model = LiteFieldNet(CHANNELS, args.width)
