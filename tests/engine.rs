@@ -191,6 +191,21 @@ fn development_split_accuracy_floors() {
     );
 }
 
+/// The `paper` preset (the method as published, no field) with the true ends: a floor
+/// under its measured 0.266 / 0.432 (README, Accuracy), which once fell unnoticed to
+/// 0.126 / 0.152 when a second pass at another scale reached it.
+#[test]
+fn the_paper_preset_keeps_its_accuracy() {
+    common::assert_split_iou_with(
+        "paper preset, true ends",
+        ["paper", "paper"],
+        None,
+        eval::EndsFrom::Truth,
+        eval::Camera::default(),
+        (0.24, 0.38),
+    );
+}
+
 /// A cable field made from a scene's true mask: cable probability = mask coverage of
 /// each 8 px cell (doubled, capped at 1), no direction.
 fn field_from_mask(mask: &image::GrayImage) -> engine::CableField {

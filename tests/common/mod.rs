@@ -42,10 +42,21 @@ pub fn assert_split_iou(
     camera: eval::Camera,
     floors: (f64, f64),
 ) {
+    assert_split_iou_with(label, ["default", "clutter"], network, ends, camera, floors);
+}
+
+/// [`assert_split_iou`] with the named presets for `simple/` and `hard/`.
+pub fn assert_split_iou_with(
+    label: &str,
+    presets: [&str; 2],
+    network: Option<&dyn EndpointDetector>,
+    ends: eval::EndsFrom,
+    camera: eval::Camera,
+    floors: (f64, f64),
+) {
     let samples = eval::load_dataset(&eval::default_dataset_dir())
         .unwrap_or_else(|e| panic!("dataset missing ({e}); set ARIADNE_DATASET"));
-    let simple = Params::preset("default").unwrap();
-    let hard = Params::preset("clutter").unwrap();
+    let [simple, hard] = presets.map(|name| Params::preset(name).unwrap());
     let setup = eval::Setup {
         network,
         ends,

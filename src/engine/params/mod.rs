@@ -369,8 +369,8 @@ impl Params {
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
     /// refinement on the image, no seed regions, no brightening of a dim photo or sharpening
-    /// of a soft one, masks as
-    /// wide as the walk's superpixels — with the paper's and its authors' code's
+    /// of a soft one, no second pass at another scale for cables wider or thinner than
+    /// nominal, masks as wide as the walk's superpixels — with the paper's and its authors' code's
     /// constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on the newest turn, turns up to 90°,
     /// 100 steps). What the paper leaves open stays ours: the global pairing of ends
     /// and the penalised spline fit.
@@ -390,6 +390,7 @@ impl Params {
             seed_region_steps: 0.0,
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
+            width_tolerance: 100.0,
             ..Self::default()
         }
     }

@@ -9,6 +9,8 @@ fn presets_are_valid_and_published() {
     }
     let c = Params::preset("clutter").unwrap();
     assert_eq!((c.n_segments, c.compactness, c.sigma), (1500, 10.0, 1.0));
+    // The paper segments a photo at one scale.
+    assert_eq!(Params::preset("paper").unwrap().width_tolerance, 100.0);
     let d = Params::preset("default").unwrap();
     assert_eq!((d.n_segments, d.compactness, d.sigma), (2000, 20.0, 1.0));
     assert!(matches!(
