@@ -368,12 +368,12 @@ impl Params {
 
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
-    /// refinement on the image, no seed regions, no brightening of a dim photo or sharpening
-    /// of a soft one, no second pass at another scale for cables wider or thinner than
-    /// nominal, masks as wide as the walk's superpixels — with the paper's and its authors' code's
-    /// constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on the newest turn, turns up to 90°,
-    /// 100 steps). What the paper leaves open stays ours: the global pairing of ends
-    /// and the penalised spline fit.
+    /// refinement on the image, no seed regions, no brightening of a dim photo or
+    /// sharpening of a soft one, no second pass at another scale for cables wider or
+    /// thinner than nominal, masks as wide as the walk's superpixels — with the paper's
+    /// and its authors' code's constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on
+    /// the newest turn, turns up to 90°, 100 steps). What the paper leaves open stays
+    /// ours: the global pairing of ends and the penalised spline fit.
     fn paper() -> Self {
         Self {
             hist_bins: 8,
