@@ -130,6 +130,13 @@ CAMOUFLAGE = 0.0
 SLEEVES = 0.0
 
 
+def option_drawn(rng: random.Random, share: float) -> bool:
+    """True with probability `share`, for an option that is off by default: at 0 it
+    draws no random number, so the recipe's scenes stay those the bundled model saw
+    (model card, Training; `make scene-check`)."""
+    return share > 0 and rng.random() < share
+
+
 def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
     """A procedural background; `base`, when given, is its main colour."""
     nrng = np.random.default_rng(rng.randrange(1 << 30))
@@ -292,7 +299,7 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
         if not (tol <= end[0] <= w - 1 - tol and tol <= end[1] <= h - 1 - tol):
             continue
         ends.append((float(end[0]), float(end[1])))
-        if SLEEVES > 0 and rng.random() < SLEEVES:
+        if option_drawn(rng, SLEEVES):
             draw_sleeve(dl, da, path, i == 0, wpx, ss, rng)
         if rng.random() < terminals_p:  # a metal terminal beyond the insulation
             d = end - prev
@@ -418,8 +425,7 @@ def composite(p: Photo, rng: random.Random) -> Scene:
     if rng.random() < 0.3:
         cables = np.clip(cables * rng.uniform(0.3, 1.2), 0, 255)
     base = None
-    # (no draw when off, so the recipe's scenes stay those the bundled model saw)
-    if CAMOUFLAGE > 0 and rng.random() < CAMOUFLAGE:  # the background wears a cable's colour
+    if option_drawn(rng, CAMOUFLAGE):  # the background wears one cable's colour
         base = near_colour(rng, colour_along(cables, rng.choice(p.lines)))
     rgb = cables * a + background(rng, base=base) * (1 - a)
     return Scene(rgb, p.mask.copy(), [l.copy() for l in p.lines], list(p.ends))
@@ -506,7 +512,7 @@ def sample_scene(photos: list[Photo], rng: random.Random, real=0.25, composed=0.
             add_cables(scene, rng, rng.randrange(1, 3))
     else:
         scene = Scene(background(rng), np.zeros((IN_H, IN_W), np.float32))
-        hidden = CAMOUFLAGE > 0 and rng.random() < CAMOUFLAGE
+        hidden = option_drawn(rng, CAMOUFLAGE)  # drawn before the count, as trained
         add_cables(scene, rng, rng.randrange(1, 7), camouflage=hidden)
         scene.rgb = np.clip(scene.rgb, 0, 255)
     scene = affine(scene, rng)
