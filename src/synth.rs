@@ -242,6 +242,10 @@ pub enum Case {
     DarkOnDark,
     /// Two cables of the same colour running side by side, two cable widths apart.
     SideBySide,
+    /// The same at the width cables have in a 640x480 photo of a work cell (8 px): the
+    /// strip of background between them is as wide as a superpixel and reads as a
+    /// cable with an edge on either side.
+    SideBySideThin,
     /// A cable crossing the frame from border to border (no end in view), and one
     /// with both ends in view.
     NoEndInView,
@@ -251,9 +255,10 @@ pub enum Case {
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 4] = [
+    pub const ALL: [Case; 5] = [
         Case::DarkOnDark,
         Case::SideBySide,
+        Case::SideBySideThin,
         Case::NoEndInView,
         Case::Loop,
     ];
@@ -262,13 +267,21 @@ impl Case {
 /// A cable to draw: centreline and colour.
 type Drawn = (Vec<[f32; 2]>, [u8; 3]);
 
-/// Width of the cables of [`case`] scenes, pixels.
-const CASE_WIDTH: f32 = 11.0;
+impl Case {
+    /// Width of the case's cables, pixels.
+    fn cable_width(self) -> f32 {
+        match self {
+            Case::SideBySideThin => 8.0,
+            _ => 11.0,
+        }
+    }
+}
 
 /// A [`Case`] scene: shaded cables (a darker rim, a lighter core) with crimped metal
 /// terminals beyond every end inside the frame, on a noisy plain background.
 pub fn case(case: Case) -> Scene {
     let (w, h) = (640u32, 480u32);
+    let width = case.cable_width();
     let line = |f: &dyn Fn(f32) -> [f32; 2], n: usize| -> Vec<[f32; 2]> {
         (0..=n).map(|i| f(i as f32 / n as f32)).collect()
     };
@@ -287,9 +300,9 @@ pub fn case(case: Case) -> Scene {
                 [14, 14, 16],
             )],
         ),
-        Case::SideBySide => {
+        Case::SideBySide | Case::SideBySideThin => {
             let a = line(&arc(90.0, 300.0, 560.0, 260.0, 0.2), 600);
-            let b = a.iter().map(|p| [p[0], p[1] + 3.0 * CASE_WIDTH]).collect();
+            let b = a.iter().map(|p| [p[0], p[1] + 3.0 * width]).collect();
             (
                 [225, 222, 215],
                 vec![(a, [200, 40, 35]), (b, [200, 40, 35])],
@@ -327,12 +340,12 @@ pub fn case(case: Case) -> Scene {
     for (centreline, color) in cables {
         let rim = color.map(|c| (c as f32 * 0.55) as u8);
         let core = color.map(|c| (c as f32 * 1.25 + 25.0).min(255.0) as u8);
-        for (width, colour) in [(CASE_WIDTH, rim), (CASE_WIDTH - 3.0, color), (3.0, core)] {
-            stroke(&centreline, width, w, h, |x, y| {
+        for (stroke_width, colour) in [(width, rim), (width - 3.0, color), (3.0, core)] {
+            stroke(&centreline, stroke_width, w, h, |x, y| {
                 image.put_pixel(x, y, Rgb(colour))
             });
         }
-        stroke(&centreline, CASE_WIDTH, w, h, |x, y| {
+        stroke(&centreline, width, w, h, |x, y| {
             mask.put_pixel(x, y, Luma([255]))
         });
         for (end, before) in [
@@ -347,7 +360,7 @@ pub fn case(case: Case) -> Scene {
                 let d = [end[0] - before[0], end[1] - before[1]];
                 let n = (d[0] * d[0] + d[1] * d[1]).sqrt().max(1e-3);
                 let tip = [end[0] + d[0] / n * 14.0, end[1] + d[1] / n * 14.0];
-                stroke(&[end, tip], CASE_WIDTH - 4.0, w, h, |x, y| {
+                stroke(&[end, tip], width - 4.0, w, h, |x, y| {
                     image.put_pixel(x, y, Rgb([175, 170, 160]))
                 });
             }

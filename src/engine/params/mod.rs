@@ -142,6 +142,13 @@ pub struct Params {
     /// Lab distance at which a vertex's lateral contrast saturates at 1 (a clearly
     /// visible edge).
     pub contrast_saturation: f32,
+    /// A vertex's lateral contrast is at most this many times its larger Lab distance
+    /// to the image two superpixel steps to either side (0: no such cap). The strip of
+    /// background between two same-colour cables side by side differs from the cables
+    /// on both sides, as a cable differs from the background, but it matches the
+    /// background beyond them; a cable does not (README, "How the engine uses the
+    /// field").
+    pub far_contrast_factor: f32,
     /// A head counts as heading out of the frame when the component of its unit heading
     /// towards the near edge is at least this.
     pub border_outward_cos: f32,
@@ -305,6 +312,7 @@ impl Default for Params {
             refine_radius_px: 16.0,
             mask_width_px: 7.0,
             contrast_saturation: 25.0,
+            far_contrast_factor: 1.5,
             border_outward_cos: 0.3,
             stopped_seed_reach: 2.0,
             stopped_border_reach: 2.0,

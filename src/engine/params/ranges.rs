@@ -67,6 +67,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("refine_radius_px", 1.0, 100.0),
     ("mask_width_px", 0.0, 200.0),
     ("contrast_saturation", 0.1, 500.0),
+    ("far_contrast_factor", 0.0, 100.0),
     ("border_outward_cos", 0.0, 1.0),
     ("stopped_seed_reach", 0.0, 10.0),
     ("stopped_border_reach", 0.0, 10.0),

@@ -17,8 +17,11 @@
 //! - c, the candidate's lateral contrast in 0..=1: the smaller of its Lab distances to
 //!   the image one superpixel step to either side of the step's direction, divided by
 //!   `contrast_saturation` and capped at 1 (a cable differs from the background on both
-//!   sides; a vertex of the background beside a cable on one side only). Not in the
-//!   paper: it keeps walks off plain background. 1 with `lateral_contrast` off;
+//!   sides; a vertex of the background beside a cable on one side only), and at most
+//!   `far_contrast_factor` times the larger distance two steps to either side (the
+//!   strip of background between two same-colour cables side by side differs from both
+//!   cables but matches the background beyond them). Not in the paper: it keeps walks
+//!   off plain background. 1 with `lateral_contrast` off;
 //! - f, the cable field's term (when a field is given and `use_field` is on):
 //!   (ε + (1 − ε) p) · (1 − w + w a), where p is the candidate's mean cable
 //!   probability, a the agreement of the step with the field's direction

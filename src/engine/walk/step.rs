@@ -105,6 +105,8 @@ impl Walker<'_> {
     /// How much vertex `v` differs in colour from the image one step to either side of
     /// the heading `dir`: the smaller of the two Lab distances (a cable differs from the
     /// background on both sides; a walk on the background beside a cable only on one),
+    /// capped at `far_contrast_factor` times the larger distance two steps to either side
+    /// (the background between two cables side by side matches what lies beyond them),
     /// saturating at 1; 1 when lateral contrast is off.
     pub(super) fn contrast(&self, v: u32, dir: [f32; 2]) -> f32 {
         if !self.params.lateral_contrast {
@@ -113,15 +115,29 @@ impl Walker<'_> {
         let vert = &self.graph.vertices[v as usize];
         let c = vert.centroid;
         let normal = [-dir[1], dir[0]];
-        let mut least = f32::INFINITY;
-        for sign in [-1.0, 1.0] {
-            let x = (c[0] + sign * normal[0] * self.side_px).round();
-            let y = (c[1] + sign * normal[1] * self.side_px).round();
+        let differs = |reach: f32, sign: f32| {
+            let x = (c[0] + sign * normal[0] * reach).round();
+            let y = (c[1] + sign * normal[1] * reach).round();
             if x < 0.0 || y < 0.0 || x >= self.lab.width as f32 || y >= self.lab.height as f32 {
-                continue;
+                return None;
             }
-            let sample = self.lab.at(y as usize * self.lab.width + x as usize);
-            least = least.min(dist3(sample, vert.mean_lab));
+            Some(dist3(
+                self.lab.at(y as usize * self.lab.width + x as usize),
+                vert.mean_lab,
+            ))
+        };
+        let mut least = [-1.0, 1.0]
+            .into_iter()
+            .filter_map(|sign| differs(self.side_px, sign))
+            .fold(f32::INFINITY, f32::min);
+        let factor = self.params.far_contrast_factor;
+        if factor > 0.0
+            && let (Some(a), Some(b)) = (
+                differs(2.0 * self.side_px, -1.0),
+                differs(2.0 * self.side_px, 1.0),
+            )
+        {
+            least = least.min(factor * a.max(b));
         }
         if least.is_finite() {
             (least / self.params.contrast_saturation).min(1.0)
