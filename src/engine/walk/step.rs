@@ -130,12 +130,13 @@ impl Walker<'_> {
             .into_iter()
             .filter_map(|sign| differs(self.side_px, sign))
             .fold(f32::INFINITY, f32::min);
+        // The cap binds only when both far sides are within `least / factor`: the second
+        // is read only when the first is.
         let factor = self.params.far_contrast_factor;
         if factor > 0.0
-            && let (Some(a), Some(b)) = (
-                differs(2.0 * self.side_px, -1.0),
-                differs(2.0 * self.side_px, 1.0),
-            )
+            && let Some(a) = differs(2.0 * self.side_px, -1.0)
+            && factor * a < least
+            && let Some(b) = differs(2.0 * self.side_px, 1.0)
         {
             least = least.min(factor * a.max(b));
         }
