@@ -249,18 +249,21 @@ pub enum Case {
     /// A cable crossing the frame from border to border (no end in view), and one
     /// with both ends in view.
     NoEndInView,
-    /// A cable that crosses itself in a loop.
+    /// A cable bent round in two tight arcs (it does not cross itself).
     Loop,
+    /// A cable that crosses itself in a loop.
+    CrossingLoop,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 5] = [
+    pub const ALL: [Case; 6] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
         Case::NoEndInView,
         Case::Loop,
+        Case::CrossingLoop,
     ];
 }
 
@@ -322,10 +325,23 @@ pub fn case(case: Case) -> Scene {
             ],
         ),
         Case::Loop => {
-            // A prolate cycloid: one loop where the cable crosses itself.
+            // A prolate cycloid x = a u − b sin u, y = −b cos u, a = 32, b = 90, over
+            // u in -1.2..2π + 1.2: arcs of two of its loops, which would close beyond
+            // that range (at u = ±2.23 about 0 and 2π), so it does not cross itself; its
+            // tightest bends are (b − a)² / b = 37 px.
             let f = |t: f32| {
                 let u = -1.2 + t * (std::f32::consts::TAU + 2.4);
                 [140.0 + 32.0 * u - 90.0 * u.sin(), 250.0 - 90.0 * u.cos()]
+            };
+            ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
+        }
+        Case::CrossingLoop => {
+            // The same curve with a = 40, b = 100 over one period about u = 0: it
+            // crosses itself at u = ±2.13 (a u = b sin u), at (320, 273), its two
+            // branches 85° apart; its tightest bend, at the top, is 36 px.
+            let f = |t: f32| {
+                let u = -4.0 + t * 8.0;
+                [320.0 + 40.0 * u - 100.0 * u.sin(), 220.0 - 100.0 * u.cos()]
             };
             ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
         }
