@@ -242,15 +242,16 @@ pub enum Case {
     DarkOnDark,
     /// Two cables of the same colour running side by side, two cable widths apart.
     SideBySide,
-    /// The same at the width cables have in a 640x480 photo of a work cell (8 px): the
-    /// strip of background between them is as wide as a superpixel and reads as a
-    /// cable with an edge on either side.
-    SideBySideThin,
     /// A cable crossing the frame from border to border (no end in view), and one
     /// with both ends in view.
     NoEndInView,
     /// A cable bent round in two tight arcs (it does not cross itself).
     Loop,
+    // Later cases come last: a case's noise is seeded by its discriminant.
+    /// `SideBySide` at the width cables have in a 640x480 photo of a work cell (8 px):
+    /// the strip of background between them is as wide as a superpixel and reads as a
+    /// cable with an edge on either side.
+    SideBySideThin,
     /// A cable that crosses itself in a loop.
     CrossingLoop,
 }
@@ -265,12 +266,7 @@ impl Case {
         Case::Loop,
         Case::CrossingLoop,
     ];
-}
 
-/// A cable to draw: centreline and colour.
-type Drawn = (Vec<[f32; 2]>, [u8; 3]);
-
-impl Case {
     /// Width of the case's cables, pixels.
     fn cable_width(self) -> f32 {
         match self {
@@ -279,6 +275,9 @@ impl Case {
         }
     }
 }
+
+/// A cable to draw: centreline and colour.
+type Drawn = (Vec<[f32; 2]>, [u8; 3]);
 
 /// A [`Case`] scene: shaded cables (a darker rim, a lighter core) with crimped metal
 /// terminals beyond every end inside the frame, on a noisy plain background.
