@@ -48,6 +48,8 @@ pub struct View {
     /// The true terminals: those of the whole photo in view, off the view's border by
     /// the border tolerance (in the dataset's pixels).
     pub terminals: Vec<[f64; 2]>,
+    /// The annotated centrelines in the view's pixels (points outside the view kept).
+    pub centrelines: Vec<Vec<[f32; 2]>>,
 }
 
 impl View {
@@ -67,6 +69,7 @@ impl View {
             return Ok(Self {
                 bytes,
                 terminals: terminal_ends(&sample.cables, w, h),
+                centrelines: sample.cables.clone(),
                 size: (w, h),
                 mask_all,
                 cable_masks,
@@ -118,14 +121,24 @@ impl View {
                 && p[0] <= (x0 + cw) as f64 - 1.0 - tol
                 && p[1] <= (y0 + ch) as f64 - 1.0 - tol
         };
+        let to_view = |p: [f64; 2]| {
+            [
+                (p[0] - x0 as f64 + 0.5) * fx - 0.5,
+                (p[1] - y0 as f64 + 0.5) * fy - 0.5,
+            ]
+        };
         let terminals = terminal_ends(&sample.cables, w, h)
             .into_iter()
             .filter(in_view)
-            .map(|p| {
-                [
-                    (p[0] - x0 as f64 + 0.5) * fx - 0.5,
-                    (p[1] - y0 as f64 + 0.5) * fy - 0.5,
-                ]
+            .map(to_view)
+            .collect();
+        let centrelines = sample
+            .cables
+            .iter()
+            .map(|line| {
+                line.iter()
+                    .map(|p| to_view([f64::from(p[0]), f64::from(p[1])]).map(|v| v as f32))
+                    .collect()
             })
             .collect();
         Ok(Self {
@@ -138,6 +151,7 @@ impl View {
                 .filter(|m| m.pixels().any(|p| p[0] > 0))
                 .collect(),
             terminals,
+            centrelines,
         })
     }
 }
