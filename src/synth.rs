@@ -254,17 +254,21 @@ pub enum Case {
     SideBySideThin,
     /// A cable that crosses itself in a loop.
     CrossingLoop,
+    /// A cable whose terminal lies against the side of another cable (a T-junction):
+    /// the walks along the other cable pass within reach of that end.
+    TerminalAgainstCable,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 6] = [
+    pub const ALL: [Case; 7] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
         Case::NoEndInView,
         Case::Loop,
         Case::CrossingLoop,
+        Case::TerminalAgainstCable,
     ];
 
     /// Width of the case's cables, pixels.
@@ -344,6 +348,21 @@ pub fn case(case: Case) -> Scene {
             };
             ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
         }
+        Case::TerminalAgainstCable => (
+            // The first cable sags through (318, 254); the second rises from the bottom
+            // edge to an end 17 px below that, its metal tip touching the first.
+            [226, 224, 218],
+            vec![
+                (
+                    line(&arc(100.0, 200.0, 540.0, 220.0, 0.1), 600),
+                    [30, 150, 50],
+                ),
+                (
+                    line(&arc(340.0, 479.0, 320.0, 271.0, 0.08), 300),
+                    [40, 40, 44],
+                ),
+            ],
+        ),
     };
     let mut rng = Rng::new(case as u64 + 1);
     let mut image = RgbImage::from_fn(w, h, |_, _| {

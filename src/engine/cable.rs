@@ -89,6 +89,9 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             .map(|&v| graph.vertices[v as usize].centroid),
     );
     weights.resize(points.len(), 1.0);
+    // The far end's point and weight, kept through the refinement: a seed exactly, the
+    // frame's edge where the cable leaves it.
+    let mut far_anchor = None;
     let far_index = match course.ends[1] {
         FarEnd::Seed(t) => {
             let target = seeds[t].point;
@@ -102,6 +105,7 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             }
             points.push(target);
             weights.push(params.end_weight);
+            far_anchor = Some((target, params.end_weight));
             Some(t)
         }
         FarEnd::Border => {
@@ -111,6 +115,9 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             if let Some(exit) = border_exit(last, dir, sp.width, sp.height, reach) {
                 points.push(exit);
                 weights.push(1.0);
+                // Held there as firmly as an end: profiles cannot be read past the frame,
+                // and the refinement would otherwise carry the last points out of it.
+                far_anchor = Some((exit, params.end_weight));
             }
             None
         }
@@ -127,13 +134,13 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             ridge_share = refined.ridge_share.or(ridge_share);
             let mut pts = refined.points;
             let mut w = vec![1.0; pts.len()];
-            // The given ends stay where they were given.
+            // The given ends stay where they were given, an exit on the frame's edge.
             pts[0] = start;
             w[0] = params.end_weight;
-            if let Some(t) = far_index {
+            if let Some((point, weight)) = far_anchor {
                 let last = pts.len() - 1;
-                pts[last] = seeds[t].point;
-                w[last] = params.end_weight;
+                pts[last] = point;
+                w[last] = weight;
             }
             spline = BSpline::fit(&pts, &w, params.knot_spacing_px, params.smoothing)?;
             polyline = spline.sample(params.polyline_step_px);

@@ -241,6 +241,12 @@ pub struct Params {
     /// A candidate whose mean cable probability is at least this is accepted even when
     /// its lateral contrast is low (a dark cable on a dark background).
     pub field_trust: f32,
+    /// A walk that comes within `close_radius_px` of another end closes on it only when
+    /// its heading agrees with the field's direction at that end at least this much
+    /// ([`crate::engine::field::alignment`]: 1 along, 0 across, 1/2 where the field has
+    /// no direction): a walk passing the tip of a cable that ends against its side (a
+    /// T-junction) goes on. 0 closes on every end within reach.
+    pub field_close_min_alignment: f32,
     /// Exponent of the walk's mean cable probability in its quality.
     pub quality_field_exponent: f32,
     /// Cable probability from which a point counts as on a cable (centreline share,
@@ -343,6 +349,7 @@ impl Default for Params {
             field_min_cable: 0.0,
             field_gap_min_cable: 0.02,
             field_trust: 0.6,
+            field_close_min_alignment: 0.25,
             quality_field_exponent: 1.0,
             field_level: 0.3,
             field_min_share: 0.15,

@@ -35,7 +35,10 @@
 //! cable to another), or when its contrast is below `min_contrast` unless the field is
 //! sure (p ≥ `field_trust`) that it is a cable.
 //!
-//! A walk ends on reaching another seed (within r), on leaving the frame, when the best
+//! A walk ends on reaching another seed (within r; with a field, only when the walk's
+//! heading agrees with the field's direction at that seed by at least
+//! `field_close_min_alignment`, so a walk passing the tip of another cable that ends
+//! against its side goes on), on leaving the frame, when the best
 //! candidate's colour no longer matches the model (it left the cable) or at the
 //! iteration cap. Each walk records the evidence pairing needs: mean colour agreement,
 //! smoothness, and how much its vertices stand out from their sides (a cable is a thin
@@ -44,7 +47,7 @@
 mod step;
 
 use super::color::LabImage;
-use super::field::{CableField, VertexField};
+use super::field::{CableField, VertexField, alignment};
 use super::geometry::{border_exit, dist, heading, norm};
 use super::graph::{Graph, Neighbourhood};
 use super::{Deadline, EngineError, Params};
@@ -337,6 +340,7 @@ impl<'a> Walker<'a> {
         let p = self.params;
         let here = *points.last()?;
         if length > p.close_radius_px {
+            let dir = heading(points, p.heading_span_px);
             let hit = self
                 .seeds
                 .iter()
@@ -344,6 +348,7 @@ impl<'a> Walker<'a> {
                 .filter(|&(t, _)| t != s)
                 .map(|(t, seed)| (t, dist(seed.point, here)))
                 .filter(|&(_, d)| d <= p.close_radius_px)
+                .filter(|&(t, _)| self.arrives_along(t, dir))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((t, _)) = hit {
                 return Some(WalkEnd::Seed(t));
@@ -352,6 +357,16 @@ impl<'a> Walker<'a> {
         let dir = heading(points, p.heading_span_px);
         self.near_border_heading_out(here, dir, 1.0)
             .then_some(WalkEnd::Border)
+    }
+
+    /// Whether a walk heading along `dir` arrives at seed `t` along the cable the field
+    /// sees there (always without a field): a terminal lying against the side of the
+    /// walk's cable belongs to another cable, whose direction there is across the walk.
+    fn arrives_along(&self, t: usize, dir: [f32; 2]) -> bool {
+        let at = self.seeds[t].point;
+        self.field_map.is_none_or(|f| {
+            alignment(dir, f.orientation_at(at[0], at[1])) >= self.params.field_close_min_alignment
+        })
     }
 
     /// How a walk that found no acceptable next vertex ends: on a seed just ahead (the

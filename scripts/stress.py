@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""Writes synthetic work-cell photos the development split does not have, in its layout.
+
+Backgrounds from white to black and saturated card, cables of every colour (black and
+white among them) that cross, run out of the frame at both ends, or end in view with a
+metal terminal; shaded (a darker rim, a lighter core), 7-11 px wide at 640x480, smooth
+(bends no tighter than about 40 px). One folder per background kind, so that
+`ariadne eval --dataset DIR` reports each kind on its own row:
+
+    training/.venv/bin/python scripts/stress.py /tmp/stress
+    target/release/ariadne eval --dataset /tmp/stress --endpoints detect
+
+Each photo has `NNNNN.jpg` (quality 90), its centrelines `NNNNN.txt` and 7 px masks
+`NNNNN_mask_K.png` / `NNNNN_mask_all.png`, as the cables dataset (its README). Seeded:
+the same scenes every run. These scenes are drawn, not photographed, and the bundled
+network trained on drawn cables too: read them as a search for the engine's failures
+on such backgrounds and layouts, not as a forecast for photos.
+"""
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFilter
+
+W, H = 640, 480
+MASK_WIDTH = 7
+# Ends closer to the border than this are where a cable leaves the frame (the
+# dataset's convention); ends drawn in view are kept farther in.
+INSIDE = 40.0
+
+BACKGROUNDS = {
+    "white": [(235, 235, 230), (222, 226, 232)],
+    "grey": [(128, 128, 128), (150, 146, 140)],
+    "black": [(22, 22, 25), (38, 36, 34)],
+    "saturated": [(170, 40, 40), (40, 120, 60), (30, 40, 90), (220, 200, 60), (230, 130, 40)],
+}
+CABLE_COLOURS = [
+    (220, 220, 215),  # white
+    (35, 35, 38),  # black
+    (200, 30, 30),
+    (30, 60, 190),
+    (30, 150, 50),
+    (230, 120, 20),
+    (240, 220, 40),
+    (120, 70, 40),  # brown
+    (150, 40, 160),
+]
+
+
+def smooth_path(rng, start, heading, steps):
+    """A path of 1 px steps from `start`, its heading driven by three slow sines (the
+    tightest bends about 40 px in radius)."""
+    waves = [(rng.uniform(-0.9, 0.9) / (k + 1), rng.uniform(0.5, 2.0) * (k + 1),
+              rng.uniform(0.0, 2 * math.pi)) for k in range(3)]
+    p = np.array(start, dtype=float)
+    points = [p.copy()]
+    for i in range(1, steps):
+        s = i / 700.0
+        theta = heading + sum(a * math.sin(f * s * math.pi + ph) for a, f, ph in waves)
+        p = p + [math.cos(theta), math.sin(theta)]
+        points.append(p.copy())
+    return np.array(points)
+
+
+def inside(p, margin):
+    return margin <= p[0] <= W - 1 - margin and margin <= p[1] <= H - 1 - margin
+
+
+def through_cable(rng):
+    """A cable entering at one side of the frame and leaving at another, clipped to the
+    frame (both ends on the border)."""
+    while True:
+        side = rng.integers(4)
+        start = [(rng.uniform(80, W - 80), 0.0), (W - 1.0, rng.uniform(80, H - 80)),
+                 (rng.uniform(80, W - 80), H - 1.0), (0.0, rng.uniform(80, H - 80))][side]
+        heading = [math.pi / 2, math.pi, -math.pi / 2, 0.0][side] + rng.uniform(-0.6, 0.6)
+        path = smooth_path(rng, start, heading, 1400)
+        out = next((i for i in range(5, len(path)) if not inside(path[i], 0.0)), None)
+        if out is not None and out > 250:
+            return np.clip(path[:out], 0.0, [W - 1.0, H - 1.0])
+
+
+def cable_in_view(rng):
+    """A cable with both ends in view, at least 30 px from the border all along."""
+    while True:
+        start = (rng.uniform(INSIDE, W - INSIDE), rng.uniform(INSIDE, H - INSIDE))
+        path = smooth_path(rng, start, rng.uniform(0, 2 * math.pi), int(rng.uniform(250, 650)))
+        if all(inside(p, 30.0) for p in path):
+            return path
+
+
+def cable_leaving(rng):
+    """A cable with one end in view and the other on the border."""
+    path = through_cable(rng)
+    cut = int(rng.uniform(0.35, 0.7) * len(path))
+    if not inside(path[cut], INSIDE):
+        return cable_in_view(rng)
+    return path[:cut] if rng.random() < 0.5 else path[cut:][::-1]
+
+
+def background(rng, kind):
+    base = np.array(BACKGROUNDS[kind][rng.integers(len(BACKGROUNDS[kind]))], dtype=float)
+    yy, xx = np.mgrid[0:H, 0:W]
+    # Uneven light: a gentle gradient across the frame, and sensor noise.
+    g = 1.0 + 0.12 * ((xx / W - 0.5) * rng.uniform(-1, 1) + (yy / H - 0.5) * rng.uniform(-1, 1))
+    img = base[None, None, :] * g[:, :, None] + rng.normal(0.0, 3.0, (H, W, 3))
+    return Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
+
+
+def draw_cable(draw, path, colour, width):
+    """A shaded cable along `path`, a metal terminal beyond each end in view."""
+    pts = [tuple(p) for p in path]
+    rim = tuple(int(c * 0.55) for c in colour)
+    core = tuple(min(255, int(c * 1.25 + 25)) for c in colour)
+    for w, c in ((width, rim), (width - 3, colour), (3, core)):
+        draw.line(pts, fill=c, width=int(round(w)), joint="curve")
+    for end, before in ((path[0], path[min(8, len(path) - 1)]), (path[-1], path[max(-9, -len(path))])):
+        if inside(end, INSIDE - 1):
+            d = (end - before) / max(np.linalg.norm(end - before), 1e-3)
+            tip = end + d * 14.0
+            draw.line([tuple(end), tuple(tip)], fill=(175, 170, 160), width=int(round(width - 4)))
+
+
+def scene(rng, kind):
+    img = background(rng, kind)
+    draw = ImageDraw.Draw(img)
+    lines = []
+    for _ in range(int(rng.integers(2, 6))):
+        r = rng.random()
+        path = through_cable(rng) if r < 0.35 else cable_leaving(rng) if r < 0.6 else cable_in_view(rng)
+        colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+        draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
+        lines.append(path)
+    return img.filter(ImageFilter.GaussianBlur(0.7)), lines
+
+
+def mask(lines):
+    m = Image.new("L", (W, H), 0)
+    d = ImageDraw.Draw(m)
+    for path in lines:
+        d.line([tuple(p) for p in path], fill=255, width=MASK_WIDTH, joint="curve")
+    return m
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--per-kind", type=int, default=12, help="photos per background kind")
+    ap.add_argument("--seed", type=int, default=11)
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+    for kind in BACKGROUNDS:
+        folder = args.out / kind
+        folder.mkdir(parents=True, exist_ok=True)
+        for i in range(args.per_kind):
+            img, lines = scene(rng, kind)
+            name = f"{i:05d}"
+            img.save(folder / f"{name}.jpg", quality=90)
+            with open(folder / f"{name}.txt", "w") as f:
+                for path in lines:
+                    keep = list(range(0, len(path), max(1, len(path) // 40)))
+                    keep += [] if keep[-1] == len(path) - 1 else [len(path) - 1]
+                    pts = path[keep].tolist()
+                    f.write(f"{len(pts)} " + " ".join(f"{x:.1f} {y:.1f}" for x, y in pts) + "\n")
+            mask(lines).save(folder / f"{name}_mask_all.png")
+            for k, path in enumerate(lines):
+                mask([path]).save(folder / f"{name}_mask_{k}.png")
+    print(f"{len(BACKGROUNDS) * args.per_kind} photos under {args.out}")
+
+
+if __name__ == "__main__":
+    main()
