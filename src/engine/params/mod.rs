@@ -86,6 +86,11 @@ pub struct Params {
     pub heading_span_px: f32,
     /// r: a walk closes when its head is this close to another end, pixels (paper: 20).
     pub close_radius_px: f32,
+    /// ... and that end lies at most this many superpixel steps to the side of the
+    /// walk's line (its heading through the head): the terminal of a cable laid
+    /// alongside, within r of the walk's side, is not where the walk's cable ends
+    /// (paper: no such limit).
+    pub close_max_lateral_steps: f32,
     /// A walk stops when the best candidate's colour similarity to the walk's colour
     /// model falls below this (histogram intersection, 0..1).
     pub min_similarity: f32,
@@ -299,6 +304,7 @@ impl Default for Params {
             max_turn_deg: 60.0,
             heading_span_px: 25.0,
             close_radius_px: 20.0,
+            close_max_lateral_steps: 1.3,
             min_similarity: 0.1,
             min_contrast: 0.15,
             model_rate: 0.3,
@@ -383,7 +389,8 @@ impl Params {
 
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
-    /// refinement on the image, no seed regions, no brightening of a dim photo or
+    /// refinement on the image, no seed regions, no limit on how far beside a walk an
+    /// end it closes on may lie, no brightening of a dim photo or
     /// sharpening of a soft one, no second pass at another scale for cables wider or
     /// thinner than nominal, masks as wide as the walk's superpixels — with the paper's
     /// and its authors' code's constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on
@@ -403,6 +410,7 @@ impl Params {
             refine: false,
             mask_width_px: 0.0,
             seed_region_steps: 0.0,
+            close_max_lateral_steps: 100.0,
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
             width_tolerance: 100.0,

@@ -35,7 +35,9 @@
 //! cable to another), or when its contrast is below `min_contrast` unless the field is
 //! sure (p ≥ `field_trust`) that it is a cable.
 //!
-//! A walk ends on reaching another seed (within r; with a field, only when the walk's
+//! A walk ends on reaching another seed (within r, and within
+//! `close_max_lateral_steps` superpixel steps of the walk's line, so a walk passing the
+//! terminal of a cable laid alongside goes on; with a field, only when the walk's
 //! heading agrees with the field's direction at that seed by at least
 //! `field_close_min_alignment`, so a walk passing the tip of another cable that ends
 //! against its side goes on), on leaving the frame, when the best
@@ -348,7 +350,7 @@ impl<'a> Walker<'a> {
                 .filter(|&(t, _)| t != s)
                 .map(|(t, seed)| (t, dist(seed.point, here)))
                 .filter(|&(_, d)| d <= p.close_radius_px)
-                .filter(|&(t, _)| self.arrives_along(t, dir))
+                .filter(|&(t, _)| self.arrives_at(t, here, dir))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((t, _)) = hit {
                 return Some(WalkEnd::Seed(t));
@@ -359,14 +361,19 @@ impl<'a> Walker<'a> {
             .then_some(WalkEnd::Border)
     }
 
-    /// Whether a walk heading along `dir` arrives at seed `t` along the cable the field
-    /// sees there (always without a field): a terminal lying against the side of the
-    /// walk's cable belongs to another cable, whose direction there is across the walk.
-    fn arrives_along(&self, t: usize, dir: [f32; 2]) -> bool {
+    /// Whether a walk whose head is at `here`, heading along `dir`, arrives at seed `t`
+    /// (within reach): the seed lies on the walk's line, not beside it (the terminal of
+    /// a cable laid alongside), and the walk runs along the cable the field sees there
+    /// (a terminal pushed against the walk's side belongs to a cable across it).
+    fn arrives_at(&self, t: usize, here: [f32; 2], dir: [f32; 2]) -> bool {
+        let p = self.params;
         let at = self.seeds[t].point;
-        self.field_map.is_none_or(|f| {
-            alignment(dir, f.orientation_at(at[0], at[1])) >= self.params.field_close_min_alignment
-        })
+        let v = [at[0] - here[0], at[1] - here[1]];
+        let beside = (v[0] * dir[1] - v[1] * dir[0]).abs();
+        beside <= p.close_max_lateral_steps * self.side_px
+            && self.field_map.is_none_or(|f| {
+                alignment(dir, f.orientation_at(at[0], at[1])) >= p.field_close_min_alignment
+            })
     }
 
     /// How a walk that found no acceptable next vertex ends: on a seed just ahead (the
