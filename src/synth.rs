@@ -257,11 +257,14 @@ pub enum Case {
     /// A cable whose terminal lies against the side of another cable (a T-junction):
     /// the walks along the other cable pass within reach of that end.
     TerminalAgainstCable,
+    /// Two cables crossing at 60°, all four ends in view: with no end detected, the
+    /// field shows one X-shaped piece.
+    Crossing,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 7] = [
+    pub const ALL: [Case; 8] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -269,6 +272,7 @@ impl Case {
         Case::Loop,
         Case::CrossingLoop,
         Case::TerminalAgainstCable,
+        Case::Crossing,
     ];
 
     /// Width of the case's cables, pixels.
@@ -360,6 +364,20 @@ pub fn case(case: Case) -> Scene {
                 (
                     line(&arc(340.0, 479.0, 320.0, 271.0, 0.08), 300),
                     [40, 40, 44],
+                ),
+            ],
+        ),
+        Case::Crossing => (
+            // Straight-ish cables through (320, 240), 60° apart.
+            [224, 222, 216],
+            vec![
+                (
+                    line(&arc(110.0, 180.0, 530.0, 300.0, 0.05), 500),
+                    [30, 70, 190],
+                ),
+                (
+                    line(&arc(220.0, 420.0, 420.0, 60.0, -0.05), 500),
+                    [230, 120, 20],
                 ),
             ],
         ),

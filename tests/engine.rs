@@ -358,8 +358,12 @@ fn with_field(
 /// the two left-hand ends; the walk from each follows its cable to the right and stops
 /// there, at no seed and not at the border, so nothing is found (README, "How the
 /// engine uses the field"). With their ends in view both are found (the tests above).
-/// Nor `CrossingLoop`, left out above, nor `TerminalAgainstCable`, whose two cables the
-/// field joins into one T-shaped piece: with no end given nothing is found there.
+/// In `Crossing` the two cables make one X-shaped piece; its two farthest superpixels
+/// are the ends of one branch each, and the other two ends are seeded as the tips of
+/// its other branches. Nor `CrossingLoop`, left out above, nor `TerminalAgainstCable`,
+/// whose two cables the field joins into one T-shaped piece: the first cable is found,
+/// but the second's end touches the first, so it is the tip of no branch and no walk
+/// along the second reaches a seed.
 #[test]
 fn cables_whose_ends_were_missed_are_found_from_the_field() {
     use ariadne_dlo::synth::Case;
