@@ -359,7 +359,7 @@ impl Default for Params {
             quality_field_exponent: 1.0,
             field_level: 0.3,
             field_min_share: 0.15,
-            field_border_min_score: 0.18,
+            field_border_min_score: 0.12,
             field_min_cable_score: 0.03,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
