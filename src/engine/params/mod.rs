@@ -86,10 +86,10 @@ pub struct Params {
     pub heading_span_px: f32,
     /// r: a walk closes when its head is this close to another end, pixels (paper: 20).
     pub close_radius_px: f32,
-    /// ... and that end lies at most this many superpixel steps to the side of the
-    /// walk's line (its heading through the head): the terminal of a cable laid
-    /// alongside, within r of the walk's side, is not where the walk's cable ends
-    /// (paper: no such limit).
+    /// A walk closes on an end within `close_radius_px` only when that end lies at most
+    /// this many superpixel steps to the side of the walk's line (its heading through
+    /// the head): the terminal of a cable laid alongside, within r of the walk's side,
+    /// is not where the walk's cable ends (paper: no such limit).
     pub close_max_lateral_steps: f32,
     /// A walk stops when the best candidate's colour similarity to the walk's colour
     /// model falls below this (histogram intersection, 0..1).
