@@ -1,5 +1,5 @@
 # The two commands: `make run` serves on the bundled defaults; `make test` runs everything.
-.PHONY: setup run test lint bench eval eval-detect lobo train-field scene-check openapi deploy-check browser-test
+.PHONY: setup run test lint bench eval eval-detect stress lobo train-field scene-check openapi deploy-check browser-test
 
 # ONNX Runtime's shared library, from the PyPI wheel, into .ort/ (idempotent).
 setup:
@@ -29,6 +29,13 @@ eval: setup
 
 eval-detect: setup
 	cargo run --release -- eval --endpoints detect
+
+# Synthetic scenes the development split lacks (README, Accuracy), drawn into out/stress
+# and evaluated from a photo alone and from the true ends.
+stress: setup
+	training/.venv/bin/python scripts/stress.py out/stress
+	cargo run --release -- eval --dataset out/stress --endpoints detect
+	cargo run --release -- eval --dataset out/stress --endpoints gt
 
 # Leave-one-background-out: train one network per held-out group (out/field-GROUP.onnx,
 # about 15-20 minutes each on 2 cores), then score each on its held-out photos.
