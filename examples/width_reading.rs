@@ -12,22 +12,15 @@
 //! on the zoomed photos unless `REACH_PX` is given, the engine's `sigma`.
 
 use ariadne_dlo::engine::color::LabImage;
-use ariadne_dlo::engine::geometry::{dist, median};
-use ariadne_dlo::engine::{Params, refine};
+use ariadne_dlo::engine::geometry::median;
+use ariadne_dlo::engine::{Params, refine, spline};
 use ariadne_dlo::eval::{self, Camera, View};
 
-/// Points along `line` every `step` pixels (the input's vertices kept), those within
+/// `line` resampled every `step` pixels ([`spline::resample`]), the points within
 /// `margin` of the border dropped.
 fn densified(line: &[[f32; 2]], step: f32, size: (u32, u32), margin: f32) -> Vec<[f32; 2]> {
-    let mut out = line.first().copied().into_iter().collect::<Vec<_>>();
-    for pair in line.windows(2) {
-        let n = (dist(pair[0], pair[1]) / step).ceil().max(1.0) as usize;
-        out.extend((1..=n).map(|k| {
-            let t = k as f32 / n as f32;
-            [0, 1].map(|i| pair[0][i] + (pair[1][i] - pair[0][i]) * t)
-        }));
-    }
     let (w, h) = (size.0 as f32, size.1 as f32);
+    let mut out = spline::resample(line, step);
     out.retain(|p| p[0] >= margin && p[1] >= margin && p[0] < w - margin && p[1] < h - margin);
     out
 }

@@ -341,8 +341,8 @@ impl<'a> Walker<'a> {
     fn classify(&self, s: usize, points: &[[f32; 2]], length: f32) -> Option<WalkEnd> {
         let p = self.params;
         let here = *points.last()?;
+        let dir = heading(points, p.heading_span_px);
         if length > p.close_radius_px {
-            let dir = heading(points, p.heading_span_px);
             let hit = self
                 .seeds
                 .iter()
@@ -356,7 +356,6 @@ impl<'a> Walker<'a> {
                 return Some(WalkEnd::Seed(t));
             }
         }
-        let dir = heading(points, p.heading_span_px);
         self.near_border_heading_out(here, dir, 1.0)
             .then_some(WalkEnd::Border)
     }
