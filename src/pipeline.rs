@@ -18,7 +18,7 @@ use image::{ExtendedColorType, ImageEncoder, RgbImage, codecs::png};
 use thiserror::Error;
 
 use crate::decode::{self, DecodeError};
-use crate::detect::{DetectError, EndpointDetector, Ends};
+use crate::detect::{DetectError, EndpointDetector, Ends, Perception};
 use crate::engine::{
     self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, exposure,
     render, sharpness,
@@ -219,11 +219,12 @@ impl Pass {
                 engine::oversegment(&image, &params, job.deadline),
             ),
         };
-        let (seen, network_ms) = match seen.transpose()? {
+        let (seen, network_ms): (Option<Perception>, f64) = match seen.transpose()? {
             Some((seen, network_ms)) => (Some(seen), network_ms),
             None => (None, 0.0),
         };
         let over = over?;
+        let network_ran = seen.is_some();
         let ends = match (job.ends, &seen) {
             (Some(points), _) => Ends::given(
                 &points
@@ -235,7 +236,7 @@ impl Pass {
             (None, None) => return Err(PipelineError::NoEnds(NO_ENDS)),
         };
         let field = seen.as_ref().and_then(|s| s.field.as_ref());
-        let segmentation = engine::segment_oversegmented(
+        let mut segmentation = engine::segment_oversegmented(
             &image,
             over,
             &ends.points,
@@ -243,15 +244,29 @@ impl Pass {
             field,
             &params,
             job.deadline,
-        )?
-        .into_photo(&frame);
-        let ends = match job.ends {
-            Some(points) => Ends::given(points),
-            None => Ends {
-                points: ends.points.iter().map(|&p| frame.photo_point(p)).collect(),
-                ..ends
-            },
+        )?;
+        let ends = match (job.ends, seen) {
+            (Some(points), _) => Ends::given(points),
+            (None, seen) => {
+                let mut ends = ends;
+                // Weaker terminal peaks where a cable stops are its ends too.
+                let candidates = seen.map(|s| s.candidates).unwrap_or_default();
+                let points: Vec<[f64; 2]> = candidates.iter().map(|d| d.point).collect();
+                for i in segmentation.confirm_ends(
+                    &points,
+                    params.end_confirm_px,
+                    params.border_margin_px,
+                ) {
+                    ends.points.push(points[i]);
+                    ends.confidences.push(candidates[i].confidence);
+                }
+                Ends {
+                    points: ends.points.iter().map(|&p| frame.photo_point(p)).collect(),
+                    ..ends
+                }
+            }
         };
+        let segmentation = segmentation.into_photo(&frame);
         Ok(Self {
             timings: Timings {
                 decode: resample_ms,
@@ -260,7 +275,7 @@ impl Pass {
             },
             segmentation,
             ends,
-            network_ran: seen.is_some(),
+            network_ran,
         })
     }
 }
@@ -388,5 +403,72 @@ mod tests {
         assert_eq!((t.endpoints, t.queue), (0.0, 0.0));
         assert!(t.decode > 0.0 && t.superpixels > 0.0 && t.encode > 0.0);
         assert!(t.total >= t.decode + t.superpixels + t.mask + t.encode);
+    }
+
+    /// Sees the given ends and, as weaker candidates, the given candidates.
+    struct Sees(Vec<[f64; 2]>, Vec<[f64; 2]>);
+
+    impl EndpointDetector for Sees {
+        fn detect_as(&self, _: &RgbImage, _: [u32; 2]) -> Result<Perception, DetectError> {
+            let found = |points: &[[f64; 2]], confidence| {
+                points
+                    .iter()
+                    .map(|&point| crate::detect::Detection { point, confidence })
+                    .collect()
+            };
+            Ok(Perception {
+                ends: found(&self.0, 0.9),
+                candidates: found(&self.1, 0.1),
+                field: None,
+            })
+        }
+    }
+
+    #[test]
+    fn a_weak_peak_where_a_cable_stops_is_reported_as_its_end() {
+        let scene = crate::synth::scene(&crate::synth::SceneSpec {
+            width: 640,
+            height: 480,
+            cables: 2,
+            cable_width: 8.0,
+            background: crate::synth::Background::Plain,
+            seed: 3,
+        });
+        let bytes = rgb_png(&scene.image).unwrap();
+        // The network saw one end of the first cable only weakly, and a weak peak on
+        // the bare background.
+        let mut ends = scene.terminals();
+        let missed = ends.remove(1);
+        let decoy = [20.0 + missed[0] / 4.0, 400.0];
+        let params = Params::default();
+        let run_with = |network: &Sees| {
+            run(&Job {
+                bytes: &bytes,
+                ends: None,
+                network: Some(network),
+                params: &params,
+                max_pixels: u64::MAX,
+                mask: MaskKind::Binary,
+                overlay: false,
+                encode: false,
+                deadline: Deadline::NONE,
+                overlap: false,
+            })
+        };
+        let out = run_with(&Sees(ends.clone(), vec![decoy, missed])).unwrap();
+        assert_eq!(out.ends.points.len(), ends.len() + 1, "{:?}", out.ends);
+        assert_eq!(out.ends.points.last(), Some(&missed));
+        assert_eq!(out.ends.confidences.last(), Some(&0.1));
+        let cable = out.segmentation.end_cables.last().copied().flatten();
+        assert_eq!(
+            cable, out.segmentation.end_cables[0],
+            "the first cable's other end"
+        );
+        // The cables are those found without the candidates.
+        let alone = run_with(&Sees(ends, Vec::new())).unwrap();
+        assert_eq!(
+            out.segmentation.cables.len(),
+            alone.segmentation.cables.len()
+        );
     }
 }

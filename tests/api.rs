@@ -48,7 +48,10 @@ impl EndpointDetector for FakeDetector {
                 confidence: 0.9,
             })
             .collect();
-        Ok(Perception { ends, field: None })
+        Ok(Perception {
+            ends,
+            ..Perception::default()
+        })
     }
 }
 

@@ -52,6 +52,10 @@ pub struct DetectorArgs {
     /// Lowest detection confidence kept as an end.
     #[arg(long, env = "ARIADNE_DETECT_THRESHOLD", default_value_t = DetectorConfig::default().detect_threshold)]
     pub detect_threshold: f32,
+    /// Weaker terminal peaks (at or above this, under --detect-threshold) start no
+    /// walk, but are reported as ends where a cable found from the other ends stops.
+    #[arg(long, env = "ARIADNE_DETECT_CONFIRM_THRESHOLD", default_value_t = DetectorConfig::default().detect_confirm_threshold)]
+    pub detect_confirm_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
     #[arg(long, env = "ARIADNE_DETECT_NMS_PX", default_value_t = DetectorConfig::default().detect_nms_px)]
     pub detect_nms_px: f64,
@@ -76,6 +80,7 @@ impl From<DetectorArgs> for DetectorConfig {
             model_input_width: a.model_input_width,
             model_input_height: a.model_input_height,
             detect_threshold: a.detect_threshold,
+            detect_confirm_threshold: a.detect_confirm_threshold,
             detect_nms_px: a.detect_nms_px,
             detect_min_cable: a.detect_min_cable,
             ort_threads: a.ort_threads,

@@ -62,6 +62,7 @@ pub fn decode(
     });
     Ok(Perception {
         ends,
+        candidates: Vec::new(),
         field: Some(field),
     })
 }

@@ -36,8 +36,26 @@ pub struct Detection {
 pub struct Perception {
     /// Cable ends, most confident first.
     pub ends: Vec<Detection>,
+    /// Weaker terminal peaks (under the detection threshold, at or above the confirm
+    /// threshold), most confident first: no walk starts from them, but one where a
+    /// cable found from the other ends stops is reported as that cable's end
+    /// ([`DetectorConfig::detect_confirm_threshold`]).
+    pub candidates: Vec<Detection>,
     /// The cable field, from models that predict one.
     pub field: Option<CableField>,
+}
+
+impl Perception {
+    /// Moves the ends under `threshold` to [`Perception::candidates`].
+    pub fn split_candidates(mut self, threshold: f32) -> Self {
+        let (ends, candidates) = self
+            .ends
+            .into_iter()
+            .partition(|d| d.confidence >= threshold);
+        self.ends = ends;
+        self.candidates = candidates;
+        self
+    }
 }
 
 /// Finds cable ends (and, with a cable-field model, the cable field) in a photo.
@@ -145,6 +163,11 @@ pub struct DetectorConfig {
     /// Lowest detection confidence kept as an end (0.25: the best of 0.15-0.45 on
     /// backgrounds the network never saw, leave-one-background-out; README, Accuracy).
     pub detect_threshold: f32,
+    /// Terminal peaks at or above this but under `detect_threshold` start no walk, but
+    /// one where a cable found from the other ends stops is reported as its end, with
+    /// its own confidence (README, Accuracy, "Ends a cable confirms"; at or above
+    /// `detect_threshold`: none).
+    pub detect_confirm_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
     pub detect_nms_px: f64,
     /// With a cable-field model, ends with no cable probability of at least this within
@@ -165,6 +188,7 @@ impl Default for DetectorConfig {
             model_input_width: 320,
             model_input_height: 240,
             detect_threshold: 0.25,
+            detect_confirm_threshold: 0.15,
             detect_nms_px: 10.0,
             detect_min_cable: 0.2,
             ort_threads: 1,
@@ -181,6 +205,9 @@ impl DetectorConfig {
         }
         if !(0.0..=1.0).contains(&self.detect_threshold) {
             return Err("detect threshold must lie in 0..=1".into());
+        }
+        if !(0.0..=1.0).contains(&self.detect_confirm_threshold) {
+            return Err("detect confirm threshold must lie in 0..=1".into());
         }
         if self.detect_nms_px.is_nan() || self.detect_nms_px < 0.0 {
             return Err("detect NMS radius must be a non-negative number of pixels".into());

@@ -77,7 +77,10 @@ pub struct OnnxDetector {
     next: AtomicUsize,
     kind: ModelKind,
     input: InputSize,
+    /// Decoded down to the lower of the two thresholds.
     decoding: Decoding,
+    /// Lowest confidence of an end (the rest are candidates).
+    threshold: f32,
     /// How a YOLO model lays out its boxes (from its metadata).
     layout: YoloLayout,
 }
@@ -133,10 +136,11 @@ impl OnnxDetector {
             kind: config.model_kind,
             input,
             decoding: Decoding {
-                threshold: config.detect_threshold,
+                threshold: config.detect_threshold.min(config.detect_confirm_threshold),
                 nms_radius_px: config.detect_nms_px,
                 min_cable: config.detect_min_cable,
             },
+            threshold: config.detect_threshold,
         };
         // Every session runs once now: a bad model fails here, and no worker's first
         // request pays for ONNX Runtime's lazy set-up.
@@ -180,14 +184,18 @@ impl OnnxDetector {
         let (shape, data) = outputs[0]
             .try_extract_tensor::<f32>()
             .map_err(|e| DetectError::Output(e.to_string()))?;
-        let ends_only = |ends| Perception { ends, field: None };
-        match self.kind {
+        let ends_only = |ends| Perception {
+            ends,
+            ..Perception::default()
+        };
+        let seen = match self.kind {
             ModelKind::Field => field::decode(shape, data, fit, self.decoding),
             ModelKind::Heatmap => output::heatmap(shape, data, fit, self.decoding).map(ends_only),
             ModelKind::Yolo => {
                 output::yolo(shape, data, fit, self.decoding, self.layout).map(ends_only)
             }
-        }
+        };
+        seen.map(|s| s.split_candidates(self.threshold))
     }
 
     /// A free session if there is one, else a wait for the next in turn.

@@ -17,6 +17,7 @@ mod border;
 mod cable;
 mod chains;
 pub mod color;
+mod confirm;
 pub mod connectivity;
 mod deadline;
 mod error;

@@ -121,6 +121,11 @@ pub struct Params {
     pub min_cable_score: f32,
     /// Walks shorter than this are never reported as cables, pixels.
     pub min_cable_length_px: f32,
+    /// A weaker terminal peak (one the detector keeps as a candidate, under its
+    /// threshold) within this many pixels of a cable's free end, not at the frame's
+    /// border, is reported as that cable's end; 0 reports none (README, Accuracy, "Ends
+    /// a cable confirms").
+    pub end_confirm_px: f32,
 
     // --- model ---
     /// Smoothing weight of the penalised B-spline fit (second-difference penalty).
@@ -316,6 +321,7 @@ impl Default for Params {
             join_radius_px: 80.0,
             min_cable_score: 0.05,
             min_cable_length_px: 30.0,
+            end_confirm_px: 20.0,
             smoothing: 1.0,
             knot_spacing_px: 45.0,
             polyline_step_px: 2.0,
@@ -392,7 +398,8 @@ impl Params {
     /// refinement on the image, no seed regions, no limit on how far beside a walk an
     /// end it closes on may lie, no brightening of a dim photo or
     /// sharpening of a soft one, no second pass at another scale for cables wider or
-    /// thinner than nominal, masks as wide as the walk's superpixels — with the paper's
+    /// thinner than nominal, masks as wide as the walk's superpixels, no weaker
+    /// terminal peaks reported where a cable ends — with the paper's
     /// and its authors' code's constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on
     /// the newest turn, turns up to 90°, 100 steps). What the paper leaves open stays
     /// ours: the global pairing of ends and the penalised spline fit.
@@ -414,6 +421,7 @@ impl Params {
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
             width_tolerance: 100.0,
+            end_confirm_px: 0.0,
             ..Self::default()
         }
     }

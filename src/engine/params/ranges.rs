@@ -60,6 +60,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("border_factor", 0.0, 1.0),
     ("lost_factor", 0.0, 1.0),
     ("join_radius_px", 0.0, 1000.0),
+    ("end_confirm_px", 0.0, 100.0),
     ("min_cable_score", 0.0, 1.0),
     ("min_cable_length_px", 0.0, 10_000.0),
     ("smoothing", 0.0, 1e6),

@@ -1,0 +1,140 @@
+//! Ends a cable confirms: a terminal peak too weak to start a walk from, lying where a
+//! cable found from the other ends stops inside the frame, is that cable's end. On a
+//! background the network never saw it is less sure of the terminals it does see
+//! (README, Accuracy, "Ends a cable confirms"); walking from every weak peak would
+//! start false cables, but a cable that stops on one confirms it. Not a peak on another
+//! cable: where one cable passes under another the network sees a weak end, and a walk
+//! that lost its cable there stops on it.
+
+use super::geometry::dist;
+use super::{Cable, Segmentation};
+
+impl Segmentation {
+    /// Reports `candidates` (weaker terminal peaks, pixels of this segmentation) as
+    /// ends of the cables that stop on them. Each cable end that is no given end takes
+    /// the nearest candidate within `reach_px` that lies on no other cable (within its
+    /// width of its centreline), both farther than `margin_px` from the frame's border
+    /// (a cable that stops there leaves the frame); each candidate ends at most one
+    /// cable, nearest pairs first. Every candidate taken becomes a new end, numbered
+    /// after the given ones in the order returned (indices into `candidates`), and is
+    /// recorded in [`Segmentation::end_cables`] and its cable's `end_indices`.
+    pub fn confirm_ends(
+        &mut self,
+        candidates: &[[f64; 2]],
+        reach_px: f32,
+        margin_px: f32,
+    ) -> Vec<usize> {
+        let (w, h) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        let inside = |p: [f32; 2]| {
+            p[0] > margin_px && p[1] > margin_px && p[0] < w - margin_px && p[1] < h - margin_px
+        };
+        let points: Vec<[f32; 2]> = candidates.iter().map(|q| q.map(|v| v as f32)).collect();
+        // For each candidate, the cables it lies on.
+        let on: Vec<Vec<usize>> = points
+            .iter()
+            .map(|&q| {
+                let near = |c: &Cable| c.polyline.iter().any(|&p| dist(p, q) <= c.width_px);
+                (0..self.cables.len())
+                    .filter(|&c| near(&self.cables[c]))
+                    .collect()
+            })
+            .collect();
+        let mut pairs: Vec<(f32, usize, usize, usize)> = Vec::new();
+        for (c, cable) in self.cables.iter().enumerate() {
+            for k in 0..2 {
+                let end = cable.ends[k];
+                if cable.end_indices[k].is_some() || !inside(end) {
+                    continue;
+                }
+                for (i, &q) in points.iter().enumerate() {
+                    let d = dist(end, q);
+                    if d <= reach_px && inside(q) && on[i].iter().all(|&o| o == c) {
+                        pairs.push((d, c, k, i));
+                    }
+                }
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut taken = Vec::new();
+        for (_, c, k, i) in pairs {
+            let cable = &mut self.cables[c];
+            if cable.end_indices[k].is_some() || taken.contains(&i) {
+                continue;
+            }
+            cable.end_indices[k] = Some(self.end_cables.len());
+            self.end_cables.push(Some(cable.id));
+            taken.push(i);
+        }
+        taken
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::spline::BSpline;
+
+    fn cable(id: usize, ends: [[f32; 2]; 2], end_indices: [Option<usize>; 2]) -> Cable {
+        Cable {
+            id,
+            ends,
+            end_indices,
+            spline: BSpline {
+                degree: 3,
+                knots: Vec::new(),
+                control_points: Vec::new(),
+            },
+            polyline: (0..=10)
+                .map(|i| {
+                    let t = i as f32 / 10.0;
+                    [0, 1].map(|j| ends[0][j] + t * (ends[1][j] - ends[0][j]))
+                })
+                .collect(),
+            length_px: dist(ends[0], ends[1]),
+            width_px: 8.0,
+            color: [0, 0, 0],
+            ridge_share: 1.0,
+            score: 0.5,
+        }
+    }
+
+    #[test]
+    fn a_free_end_inside_the_frame_takes_the_nearest_weak_peak() {
+        let mut seg = Segmentation {
+            width: 640,
+            height: 480,
+            // Cable 0 runs from given end 0 to a free end at (300, 200); cable 1 from
+            // given end 1 out of the frame at (0, 240); cable 2 from a free end at
+            // (400, 300), where it passes under cable 3, to given end 2; cable 4 from
+            // given end 5 to a free end 20 px from the frame's left side.
+            cables: vec![
+                cable(0, [[100.0, 100.0], [300.0, 200.0]], [Some(0), None]),
+                cable(1, [[200.0, 240.0], [0.0, 240.0]], [Some(1), None]),
+                cable(2, [[400.0, 300.0], [400.0, 400.0]], [None, Some(2)]),
+                cable(3, [[350.0, 296.0], [450.0, 296.0]], [Some(3), Some(4)]),
+                cable(4, [[100.0, 440.0], [20.0, 440.0]], [Some(5), None]),
+            ],
+            end_cables: vec![Some(0), Some(1), Some(2), Some(3), Some(3), Some(4)],
+            superpixels: 0,
+            working_scale: 1.0,
+            timings: Default::default(),
+        };
+        let candidates = [
+            [309.0, 200.0], // 9 px from cable 0's free end
+            [305.0, 203.0], // 5.8 px: the nearer one is taken
+            [4.0, 240.0],   // by cable 1's end, but that leaves the frame
+            [100.0, 104.0], // by a given end: not taken
+            [400.0, 292.0], // by cable 2's free end, but on cable 3
+            [9.0, 440.0],   // by cable 4's free end, but at the border
+        ];
+        let taken = seg.confirm_ends(&candidates, 12.0, 12.0);
+        assert_eq!(taken, vec![1]);
+        assert_eq!(seg.end_cables[6..], [Some(0)]);
+        assert_eq!(seg.cables[0].end_indices, [Some(0), Some(6)]);
+        assert_eq!(seg.cables[2].end_indices, [None, Some(2)]);
+        assert_eq!(seg.cables[4].end_indices, [Some(5), None]);
+        assert_eq!(seg.cables[1].end_indices, [Some(1), None]);
+        // A confirmed end takes no other peak.
+        assert!(seg.confirm_ends(&[[302.0, 200.0]], 12.0, 12.0).is_empty());
+    }
+}
