@@ -24,7 +24,8 @@ pub struct SegmentResponse {
     pub working_scale: f32,
     /// Cables found, by decreasing score.
     pub cables: Vec<CableReport>,
-    /// Every end used (given or detected), with the cable it was assigned to.
+    /// Every end: given, or found (the network's terminal peaks the walks started from,
+    /// then weaker peaks where a found cable stops), with the cable it was assigned to.
     pub endpoints: Vec<EndpointReport>,
     /// The mask as a base64-encoded PNG of the image's size.
     pub mask_png: String,
@@ -77,7 +78,8 @@ pub struct EndpointReport {
     /// Position `[x, y]`, pixels.
     pub point: [f64; 2],
     /// The network's terminal confidence in 0..=1 (the cable field's terminal heatmap
-    /// at its peak; 1 for ends given by the caller).
+    /// at its peak; 1 for ends given by the caller). Ends under the detection threshold
+    /// started no walk: a cable found from the others stops on them.
     pub confidence: f32,
     /// Id of the cable it ends, or null when no cable was found from it.
     pub cable: Option<usize>,
