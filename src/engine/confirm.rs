@@ -17,13 +17,17 @@ impl Segmentation {
     /// (a cable that stops there leaves the frame); each candidate ends at most one
     /// cable, nearest pairs first. Every candidate taken becomes a new end, numbered
     /// after the given ones in the order returned (indices into `candidates`), and is
-    /// recorded in [`Segmentation::end_cables`] and its cable's `end_indices`.
+    /// recorded in [`Segmentation::end_cables`] and its cable's `end_indices`. A reach
+    /// of 0 takes none.
     pub fn confirm_ends(
         &mut self,
         candidates: &[[f64; 2]],
         reach_px: f32,
         margin_px: f32,
     ) -> Vec<usize> {
+        if reach_px <= 0.0 {
+            return Vec::new();
+        }
         let (w, h) = ((self.width - 1) as f32, (self.height - 1) as f32);
         let inside = |p: [f32; 2]| {
             p[0] > margin_px && p[1] > margin_px && p[0] < w - margin_px && p[1] < h - margin_px
@@ -134,7 +138,8 @@ mod tests {
         assert_eq!(seg.cables[2].end_indices, [None, Some(2)]);
         assert_eq!(seg.cables[4].end_indices, [Some(5), None]);
         assert_eq!(seg.cables[1].end_indices, [Some(1), None]);
-        // A confirmed end takes no other peak.
+        // A confirmed end takes no other peak, and a reach of 0 takes none.
         assert!(seg.confirm_ends(&[[302.0, 200.0]], 12.0, 12.0).is_empty());
+        assert!(seg.confirm_ends(&[[20.0, 440.0]], 0.0, 12.0).is_empty());
     }
 }
