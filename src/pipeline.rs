@@ -127,6 +127,8 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
             WorkingFrame::corrected(width, height, job.params, k),
         )?;
         pass.timings.add(&first);
+    } else {
+        pass.segmentation.mask_scale = pass.segmentation.mask_correction(&frame, job.params);
     }
     let Pass {
         segmentation,

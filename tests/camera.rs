@@ -261,10 +261,12 @@ fn far_cables_half_as_wide_as_near_ones_are_all_found() {
 }
 
 /// Scenes of two `cable_width` px cables at 640x480, seeds 1-4: `check` gets each
-/// one's working scale and its mask IoU with the width correction and without it.
+/// one's working scale and its mask IoU with the width correction and without it (no
+/// second pass, masks as wide as `mask_width_px`).
 fn with_and_without_correction(cable_width: f32, check: impl Fn(u64, f32, f64, f64)) {
     let no_correction = Params {
         width_tolerance: 100.0,
+        mask_width_tolerance: 100.0,
         ..Params::default()
     };
     for seed in 1..=4 {
@@ -295,6 +297,33 @@ fn a_closer_camera_is_segmented_at_the_scale_its_cables_ask_for() {
         );
         assert!(corrected > 1.5 * uncorrected, "seed {seed}");
     });
+}
+
+#[test]
+fn cables_a_little_wider_than_nominal_get_wider_masks_without_a_second_pass() {
+    // Cables 10.5 px wide at 640x480 (a camera a little closer than the development
+    // photos'): within the width tolerance, so segmented once, but drawn as wide as
+    // they read rather than `mask_width_px`.
+    let fixed_masks = Params {
+        mask_width_tolerance: 100.0,
+        ..Params::default()
+    };
+    for seed in 1..=4 {
+        let truth = scene(&spec(640, 480, 10.5, seed));
+        let bytes = jpeg(&truth.image);
+        let out = run(&bytes, &truth.ends());
+        let fixed = run_with(&bytes, &truth.ends(), &fixed_masks);
+        let seg = &out.segmentation;
+        let (wider, narrow) = (mask_iou(&out, &truth.mask), mask_iou(&fixed, &truth.mask));
+        eprintln!(
+            "seed {seed}: working scale {}, mask scale {}, mask IoU {wider:.3} against {narrow:.3}",
+            seg.working_scale, seg.mask_scale
+        );
+        assert_eq!(seg.working_scale, 1.0, "seed {seed}");
+        assert!(seg.mask_scale > 1.3, "seed {seed}: {}", seg.mask_scale);
+        assert_eq!(fixed.segmentation.mask_scale, 1.0);
+        assert!(wider > narrow + 0.05, "seed {seed}");
+    }
 }
 
 #[test]

@@ -121,6 +121,7 @@ mod tests {
             end_cables: vec![Some(0), Some(1), Some(2), Some(3), Some(3), Some(4)],
             superpixels: 0,
             working_scale: 1.0,
+            mask_scale: 1.0,
             timings: Default::default(),
         };
         let candidates = [

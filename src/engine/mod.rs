@@ -74,6 +74,10 @@ pub struct Segmentation {
     /// Working pixels per photo pixel: the photo was segmented resampled by this
     /// factor (1: at its own size; see [`WorkingFrame`]).
     pub working_scale: f32,
+    /// Factor the masks are drawn wider by than `Params::mask_width_px` says, for
+    /// cables wider or thinner than nominal that were not segmented again
+    /// ([`Segmentation::mask_correction`]; 1 otherwise).
+    pub mask_scale: f32,
     /// Time of the engine's stages (`superpixels` to `splines`; the rest are 0).
     pub timings: Timings,
 }
@@ -291,6 +295,7 @@ pub fn segment_oversegmented(
         end_cables,
         superpixels: sp.count,
         working_scale: 1.0,
+        mask_scale: 1.0,
         timings,
     })
 }

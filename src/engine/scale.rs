@@ -192,6 +192,25 @@ impl Segmentation {
     /// when their width ([`measured_width`]) is within [`Params::width_tolerance`] of
     /// nominal, or when there is no cable to measure. Bounded to 0.25..=2.
     pub fn width_correction(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
+        let ratio = self.width_ratio(frame, params)?;
+        off_by_more(ratio, params.width_tolerance).then(|| ratio.clamp(0.25, 2.0))
+    }
+
+    /// The factor to draw these cables' masks wider by (found at `frame`, not to be
+    /// segmented again): their width ([`measured_width`]) over nominal when that is
+    /// off by more than [`Params::mask_width_tolerance`], else 1. A camera a little
+    /// closer than the development photos' (cables up to `width_tolerance` times
+    /// nominal) asks for no second pass, but its cables are wider all the same.
+    pub fn mask_correction(&self, frame: &WorkingFrame, params: &Params) -> f32 {
+        match self.width_ratio(frame, params) {
+            Some(ratio) if off_by_more(ratio, params.mask_width_tolerance) => (1.0 / ratio) as f32,
+            _ => 1.0,
+        }
+    }
+
+    /// Nominal over measured width of these cables in working pixels of `frame`;
+    /// `None` when there is no cable to measure.
+    fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let widths: Vec<(f32, f32)> = self
             .cables
             .iter()
@@ -199,16 +218,20 @@ impl Segmentation {
             .filter(|(w, _)| w.is_finite() && *w > 0.0)
             .collect();
         let width = measured_width(widths, params.nominal_width_px)?;
-        let ratio = params.nominal_width_px as f64 / width;
-        let tolerance = params.width_tolerance as f64;
-        (ratio > tolerance || ratio < 1.0 / tolerance).then(|| ratio.clamp(0.25, 2.0))
+        Some(params.nominal_width_px as f64 / width)
     }
 
-    /// The mask stroke width in the photo's pixels for `mask_width_px` working pixels
-    /// (0 stays 0: each cable's measured width).
+    /// The mask stroke width in the photo's pixels for `mask_width_px` working pixels,
+    /// times [`Segmentation::mask_scale`] (0 stays 0: each cable's measured width).
     pub fn mask_width(&self, mask_width_px: f32) -> f32 {
-        mask_width_px / self.working_scale
+        mask_width_px * self.mask_scale / self.working_scale
     }
+}
+
+/// True when `ratio` lies outside `1 / tolerance ..= tolerance`.
+fn off_by_more(ratio: f64, tolerance: f32) -> bool {
+    let tolerance = f64::from(tolerance);
+    ratio > tolerance || ratio < 1.0 / tolerance
 }
 
 /// The cables' width from `(width, length)` pairs in working pixels: their median

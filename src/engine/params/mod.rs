@@ -59,6 +59,10 @@ pub struct Params {
     /// The photo is segmented again at a corrected scale when the median cable width
     /// is off nominal by more than this factor (a closer or farther camera).
     pub width_tolerance: f32,
+    /// When it is off nominal by more than this factor but within `width_tolerance`
+    /// (no second pass), the masks are drawn that much wider or thinner than
+    /// `mask_width_px` (README, "Any camera").
+    pub mask_width_tolerance: f32,
 
     // --- graph ---
     /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
@@ -299,6 +303,7 @@ impl Default for Params {
             max_upscale: 4.0,
             nominal_width_px: 7.8,
             width_tolerance: 1.4,
+            mask_width_tolerance: 1.3,
             hist_bins: 4,
             neighbourhood_order: 3,
             jump_order: 5,
