@@ -217,6 +217,21 @@ impl ApiError {
     }
 
     /// The stable code of this error.
+    /// True for the refusals answered before the request's body was read (or while it
+    /// still arrived): over the body limit, no room in the queue or the upload budget,
+    /// too slow.
+    fn leaves_body_unread(&self) -> bool {
+        matches!(
+            self,
+            Self::TooLarge {
+                code: ErrorCode::BodyTooLarge,
+                ..
+            } | Self::QueueFull { .. }
+                | Self::UploadBudgetFull { .. }
+                | Self::BodyTimeout { .. }
+        )
+    }
+
     pub fn code(&self) -> ErrorCode {
         match self {
             Self::BadRequest { code, .. }
@@ -317,6 +332,7 @@ impl IntoResponse for ApiError {
                 message,
             },
         };
+        let unread_body = self.leaves_body_unread();
         let mut response = (status, Json(body)).into_response();
         if let Self::QueueFull { retry_after_s, .. }
         | Self::UploadBudgetFull { retry_after_s, .. } = self
@@ -324,6 +340,13 @@ impl IntoResponse for ApiError {
             response
                 .headers_mut()
                 .insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
+        }
+        // The rest of the body is still on the way: the connection cannot carry another
+        // request, and saying so keeps a client from sending one on it.
+        if unread_body {
+            response
+                .headers_mut()
+                .insert(header::CONNECTION, HeaderValue::from_static("close"));
         }
         response
     }
