@@ -216,7 +216,6 @@ impl ApiError {
         }
     }
 
-    /// The stable code of this error.
     /// True for the refusals answered before the request's body was read (or while it
     /// still arrived): over the body limit, no room in the queue or the upload budget,
     /// too slow.
@@ -232,6 +231,7 @@ impl ApiError {
         )
     }
 
+    /// The stable code of this error.
     pub fn code(&self) -> ErrorCode {
         match self {
             Self::BadRequest { code, .. }
