@@ -198,12 +198,15 @@ impl Segmentation {
 
     /// The factor to draw these cables' masks wider by (found at `frame`, not to be
     /// segmented again): their width ([`measured_width`]) over nominal when that is
-    /// off by more than [`Params::mask_width_tolerance`], else 1. A camera a little
+    /// off by more than [`Params::mask_width_tolerance`] (bounded to 0.5..=4, as the
+    /// second pass's scale), else 1. A camera a little
     /// closer than the development photos' (cables up to `width_tolerance` times
     /// nominal) asks for no second pass, but its cables are wider all the same.
     pub fn mask_correction(&self, frame: &WorkingFrame, params: &Params) -> f32 {
         match self.width_ratio(frame, params) {
-            Some(ratio) if off_by_more(ratio, params.mask_width_tolerance) => (1.0 / ratio) as f32,
+            Some(ratio) if off_by_more(ratio, params.mask_width_tolerance) => {
+                (1.0 / ratio.clamp(0.25, 2.0)) as f32
+            }
             _ => 1.0,
         }
     }
