@@ -121,12 +121,15 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     // camera): once more at the scale that makes them nominal (README, "Any camera").
     if let Some(k) = pass.segmentation.width_correction(&frame, job.params) {
         let first = pass.timings;
-        pass = Pass::run(
-            job,
-            &photo,
-            WorkingFrame::corrected(width, height, job.params, k),
-        )?;
+        let corrected = WorkingFrame::corrected(width, height, job.params, k);
+        pass = Pass::run(job, &photo, corrected)?;
         pass.timings.add(&first);
+        // Wide cables read sub-linearly, so shrunk photos' cables can still read wider
+        // than nominal: their masks follow, never narrower (README, "Any camera").
+        if k < 1.0 {
+            let s = pass.segmentation.mask_correction(&corrected, job.params);
+            pass.segmentation.mask_scale = s.max(1.0);
+        }
     } else {
         pass.segmentation.mask_scale = pass.segmentation.mask_correction(&frame, job.params);
     }

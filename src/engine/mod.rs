@@ -75,8 +75,9 @@ pub struct Segmentation {
     /// factor (1: at its own size; see [`WorkingFrame`]).
     pub working_scale: f32,
     /// Factor the masks are drawn wider by than `Params::mask_width_px` says, for
-    /// cables wider or thinner than nominal that were not segmented again
-    /// ([`Segmentation::mask_correction`]; 1 otherwise).
+    /// cables wider or thinner than nominal that were not segmented again, or still
+    /// wider after a photo was shrunk for them ([`Segmentation::mask_correction`]; 1
+    /// otherwise).
     pub mask_scale: f32,
     /// Time of the engine's stages (`superpixels` to `splines`; the rest are 0).
     pub timings: Timings,
