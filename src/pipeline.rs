@@ -18,7 +18,7 @@ use image::{ExtendedColorType, ImageEncoder, RgbImage, codecs::png};
 use thiserror::Error;
 
 use crate::decode::{self, DecodeError};
-use crate::detect::{DetectError, EndpointDetector, Ends, Perception};
+use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{
     self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, exposure,
     render, sharpness,
@@ -224,7 +224,7 @@ impl Pass {
                 engine::oversegment(&image, &params, job.deadline),
             ),
         };
-        let (seen, network_ms): (Option<Perception>, f64) = match seen.transpose()? {
+        let (seen, network_ms) = match seen.transpose()? {
             Some((seen, network_ms)) => (Some(seen), network_ms),
             None => (None, 0.0),
         };
@@ -325,6 +325,7 @@ fn png_bytes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::detect::Perception;
 
     #[test]
     fn a_png_that_cannot_be_written_is_an_error_not_an_empty_mask() {
@@ -371,17 +372,22 @@ mod tests {
         assert!(out.is_ok(), "{:?}", out.err());
     }
 
-    #[test]
-    fn given_ends_run_every_stage_but_detection() {
-        // At the working size, so the engine sees the decoded photo itself.
-        let scene = crate::synth::scene(&crate::synth::SceneSpec {
+    /// Two 8 px cables on a plain background, at the working size (640x480), so the
+    /// engine sees the decoded photo itself.
+    fn two_cables() -> crate::synth::Scene {
+        crate::synth::scene(&crate::synth::SceneSpec {
             width: 640,
             height: 480,
             cables: 2,
             cable_width: 8.0,
             background: crate::synth::Background::Plain,
             seed: 3,
-        });
+        })
+    }
+
+    #[test]
+    fn given_ends_run_every_stage_but_detection() {
+        let scene = two_cables();
         let bytes = rgb_png(&scene.image).unwrap();
         let ends = scene.ends();
         let params = Params::default();
@@ -431,14 +437,7 @@ mod tests {
 
     #[test]
     fn a_weak_peak_where_a_cable_stops_is_reported_as_its_end() {
-        let scene = crate::synth::scene(&crate::synth::SceneSpec {
-            width: 640,
-            height: 480,
-            cables: 2,
-            cable_width: 8.0,
-            background: crate::synth::Background::Plain,
-            seed: 3,
-        });
+        let scene = two_cables();
         let bytes = rgb_png(&scene.image).unwrap();
         // The network saw one end of the first cable only weakly, and a weak peak on
         // the bare background.
