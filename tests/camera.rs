@@ -260,6 +260,31 @@ fn far_cables_half_as_wide_as_near_ones_are_all_found() {
     assert!(mask_iou(&out, &truth.mask) > 0.6);
 }
 
+/// One scene of [`spec`] at 640x480 run with the true ends twice: with the default
+/// parameters and with `other`.
+struct Compared {
+    /// The output with the default parameters, and its mask IoU.
+    out: Output,
+    iou: f64,
+    /// The output with `other`, and its mask IoU.
+    other: Output,
+    other_iou: f64,
+}
+
+/// [`Compared`] for the scene of `cable_width` px cables drawn from `seed`.
+fn compare(cable_width: f32, seed: u64, other: &Params) -> Compared {
+    let truth = scene(&spec(640, 480, cable_width, seed));
+    let bytes = jpeg(&truth.image);
+    let out = run(&bytes, &truth.ends());
+    let other = run_with(&bytes, &truth.ends(), other);
+    Compared {
+        iou: mask_iou(&out, &truth.mask),
+        other_iou: mask_iou(&other, &truth.mask),
+        out,
+        other,
+    }
+}
+
 /// Scenes of two `cable_width` px cables at 640x480, seeds 1-4: `check` gets each
 /// one's working scale and its mask IoU with the width correction and without it (no
 /// second pass, masks as wide as `mask_width_px`).
@@ -270,13 +295,13 @@ fn with_and_without_correction(cable_width: f32, check: impl Fn(u64, f32, f64, f
         ..Params::default()
     };
     for seed in 1..=4 {
-        let truth = scene(&spec(640, 480, cable_width, seed));
-        let bytes = jpeg(&truth.image);
-        let out = run(&bytes, &truth.ends());
-        let fixed = run_with(&bytes, &truth.ends(), &no_correction);
+        let Compared {
+            out,
+            iou: corrected,
+            other: fixed,
+            other_iou: uncorrected,
+        } = compare(cable_width, seed, &no_correction);
         assert_eq!(fixed.segmentation.working_scale, 1.0);
-        let corrected = mask_iou(&out, &truth.mask);
-        let uncorrected = mask_iou(&fixed, &truth.mask);
         eprintln!(
             "width {cable_width}, seed {seed}: mask IoU {corrected:.3} corrected, \
              {uncorrected:.3} at the default scale"
@@ -309,12 +334,13 @@ fn cables_a_little_wider_than_nominal_get_wider_masks_without_a_second_pass() {
         ..Params::default()
     };
     for seed in 1..=4 {
-        let truth = scene(&spec(640, 480, 10.5, seed));
-        let bytes = jpeg(&truth.image);
-        let out = run(&bytes, &truth.ends());
-        let fixed = run_with(&bytes, &truth.ends(), &fixed_masks);
+        let Compared {
+            out,
+            iou: wider,
+            other: fixed,
+            other_iou: narrow,
+        } = compare(10.5, seed, &fixed_masks);
         let seg = &out.segmentation;
-        let (wider, narrow) = (mask_iou(&out, &truth.mask), mask_iou(&fixed, &truth.mask));
         eprintln!(
             "seed {seed}: working scale {}, mask scale {}, mask IoU {wider:.3} against {narrow:.3}",
             seg.working_scale, seg.mask_scale
@@ -349,12 +375,13 @@ fn after_a_second_pass_masks_only_widen() {
     };
     let mut widened = 0;
     for (width, seed) in (1..=4).flat_map(|seed| [(32.0, seed), (3.0, seed)]) {
-        let truth = scene(&spec(640, 480, width, seed));
-        let bytes = jpeg(&truth.image);
-        let out = run(&bytes, &truth.ends());
-        let fixed = run_with(&bytes, &truth.ends(), &fixed_masks);
+        let Compared {
+            out,
+            iou: scaled,
+            other: fixed,
+            other_iou: plain,
+        } = compare(width, seed, &fixed_masks);
         let seg = &out.segmentation;
-        let (scaled, plain) = (mask_iou(&out, &truth.mask), mask_iou(&fixed, &truth.mask));
         eprintln!(
             "width {width}, seed {seed}: working scale {}, mask scale {}, mask IoU {scaled:.3} \
              against {plain:.3} with masks as wide as mask_width_px",
