@@ -20,8 +20,8 @@ use thiserror::Error;
 use crate::decode::{self, DecodeError};
 use crate::detect::{DetectError, EndpointDetector, Ends};
 use crate::engine::{
-    self, Deadline, EngineError, Mask, MaskKind, Params, Segmentation, WorkingFrame, exposure,
-    render, sharpness,
+    self, Deadline, EngineError, MAX_CORRECTION, MIN_CORRECTION, Mask, MaskKind, Params,
+    Segmentation, WorkingFrame, exposure, render, sharpness,
 };
 use crate::timings::{Timings, ms_since as ms};
 
@@ -116,28 +116,42 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         }
         .into());
     }
-    let mut pass = Pass::run(job, &photo, frame)?;
+    let (mut frame, mut k) = (frame, 1.0);
+    let mut pass = Pass::run(job, &photo, frame, true)?;
+    // Cables too wide for the network to see (a camera much closer): at half the size,
+    // and at a quarter if the field asks again (README, "Any camera").
+    while pass.too_wide {
+        let earlier = pass.timings;
+        k *= 0.5;
+        frame = WorkingFrame::corrected(width, height, job.params, k);
+        pass = Pass::run(job, &photo, frame, k > MIN_CORRECTION)?;
+        pass.timings.add(&earlier);
+    }
     // Cables far wider or thinner than the engine's lengths suit (a closer or farther
     // camera): once more at the scale that makes them nominal (README, "Any camera").
-    if let Some(k) = pass.segmentation.width_correction(&frame, job.params) {
-        let first = pass.timings;
-        let corrected = WorkingFrame::corrected(width, height, job.params, k);
-        pass = Pass::run(job, &photo, corrected)?;
-        pass.timings.add(&first);
-        // Wide cables read sub-linearly, so shrunk photos' cables can still read wider
-        // than nominal: their masks follow, never narrower (README, "Any camera").
-        if k < 1.0 {
-            let s = pass.segmentation.mask_correction(&corrected, job.params);
-            pass.segmentation.mask_scale = s.max(1.0);
-        }
-    } else {
-        pass.segmentation.mask_scale = pass.segmentation.mask_correction(&frame, job.params);
+    let correction = pass.segmentation.width_correction(&frame, job.params);
+    if let Some(c) = correction.filter(|&c| (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION) != k) {
+        let earlier = pass.timings;
+        k = (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION);
+        frame = WorkingFrame::corrected(width, height, job.params, k);
+        pass = Pass::run(job, &photo, frame, false)?;
+        pass.timings.add(&earlier);
     }
+    // Masks as wide as the cables read. Wide cables read sub-linearly, so shrunk
+    // photos' cables can still read wider than nominal: their masks follow, never
+    // narrower; thin ones enlarged keep `mask_width_px` (README, "Any camera").
+    let s = pass.segmentation.mask_correction(&frame, job.params);
+    pass.segmentation.mask_scale = match k {
+        k if k < 1.0 => s.max(1.0),
+        k if k > 1.0 => 1.0,
+        _ => s,
+    };
     let Pass {
         segmentation,
         ends,
         network_ran,
         timings: pass_timings,
+        ..
     } = pass;
     let t = Instant::now();
     let mask_width = segmentation.mask_width(job.params.mask_width_px);
@@ -178,12 +192,22 @@ struct Pass {
     segmentation: Segmentation,
     ends: Ends,
     network_ran: bool,
+    /// The network's field at half the working size says the cables are too wide for
+    /// it at this one ([`engine::too_wide_for_the_field`]); only when asked to probe.
+    too_wide: bool,
     /// The engine's stages, `endpoints`, and `decode` = the resampling.
     timings: Timings,
 }
 
 impl Pass {
-    fn run(job: &Job<'_>, photo: &RgbImage, frame: WorkingFrame) -> Result<Self, PipelineError> {
+    /// The pass at `frame`; with `probe` (and a cable-field network) the network also
+    /// looks at half that size, to tell cables too wide for it.
+    fn run(
+        job: &Job<'_>,
+        photo: &RgbImage,
+        frame: WorkingFrame,
+        probe: bool,
+    ) -> Result<Self, PipelineError> {
         let t = Instant::now();
         let resampled = frame.resample(photo);
         // A dim photo is brightened, by one gain for the network's source and the
@@ -203,11 +227,21 @@ impl Pass {
         } else {
             &image
         };
+        let probe = probe && params.probes_wide_cables();
         let detect = |network: &dyn EndpointDetector| {
             let t = Instant::now();
-            network
-                .detect_as(source, frame.working)
-                .map(|seen| (seen, ms(t)))
+            let seen = network.detect_as(source, frame.working)?;
+            let too_wide = match &seen.field {
+                Some(full) if probe => {
+                    let half = frame.working.map(|v| (v / 2).max(1));
+                    let coarse = network.detect_as(source, half)?;
+                    coarse.field.is_some_and(|half| {
+                        engine::too_wide_for_the_field(full, &half, params.wide_field_ratio)
+                    })
+                }
+                _ => false,
+            };
+            Ok::<_, DetectError>((seen, too_wide, ms(t)))
         };
         let (seen, over) = match job.network {
             // The network on a second thread while SLIC runs here (module docs).
@@ -224,9 +258,9 @@ impl Pass {
                 engine::oversegment(&image, &params, job.deadline),
             ),
         };
-        let (seen, network_ms) = match seen.transpose()? {
-            Some((seen, network_ms)) => (Some(seen), network_ms),
-            None => (None, 0.0),
+        let (seen, too_wide, network_ms) = match seen.transpose()? {
+            Some((seen, too_wide, network_ms)) => (Some(seen), too_wide, network_ms),
+            None => (None, false, 0.0),
         };
         let over = over?;
         let network_ran = seen.is_some();
@@ -281,6 +315,7 @@ impl Pass {
             segmentation,
             ends,
             network_ran,
+            too_wide,
         })
     }
 }

@@ -88,6 +88,13 @@ impl CableField {
         })
     }
 
+    /// Share of the grid's cells whose cable probability is at least `level` (0 for an
+    /// empty grid): how much of the photo the network calls cable, whatever its size.
+    pub fn cable_share(&self, level: f32) -> f32 {
+        let on = self.cable.iter().filter(|&&p| p >= level).count();
+        on as f32 / self.cable.len().max(1) as f32
+    }
+
     /// Share of the points of `line` where the cable probability is at least `level`
     /// (0 for an empty line).
     pub fn share_on_cable(&self, line: &[[f32; 2]], level: f32) -> f32 {
@@ -206,6 +213,10 @@ mod tests {
         );
         assert!(f.cable_at(-50.0, 2.0).abs() < 1e-6, "clamped outside");
         assert_eq!(f.share_on_cable(&[[5.0, 15.0], [5.0, 25.0]], 0.5), 0.5);
+        assert!(
+            (f.cable_share(0.5) - 1.0 / 3.0).abs() < 1e-6,
+            "one row of three"
+        );
     }
 
     #[test]

@@ -6,7 +6,9 @@
 //! cables found there are much wider or thinner than nominal (a camera closer to the
 //! table or farther from it), the photo is segmented once more at the scale that makes
 //! them nominal ([`Segmentation::width_correction`]); superpixels keep their size in
-//! working pixels ([`WorkingFrame::params`]).
+//! working pixels ([`WorkingFrame::params`]). Cables so wide that the network does not
+//! see them at the working size leave no cable to measure; the network's field at half
+//! that size tells them ([`too_wide_for_the_field`]).
 
 use std::borrow::Cow;
 use std::cmp::Ordering;
@@ -14,7 +16,21 @@ use std::cmp::Ordering;
 use image::{RgbImage, imageops};
 
 use super::geometry::polyline_length;
-use super::{MIN_SIDE, Params, Segmentation};
+use super::{CableField, MIN_SIDE, Params, Segmentation};
+
+/// Smallest and largest factor on the working scale that a closer or a farther
+/// camera gets (a photo segmented at most 4 times smaller or 2 times larger).
+pub const MIN_CORRECTION: f64 = 0.25;
+/// See [`MIN_CORRECTION`].
+pub const MAX_CORRECTION: f64 = 2.0;
+
+/// Cable probability from which a field cell counts as cable for
+/// [`too_wide_for_the_field`].
+const FIELD_CABLE_LEVEL: f32 = 0.5;
+
+/// Fewest cable cells the field at half the working size must show to say the cables
+/// are too wide: about 150 px of one cable at 640x480 (a cell is 16 photo px there).
+const WIDE_MIN_CELLS: f32 = 10.0;
 
 /// Relative size changes smaller than this are not worth a resampling.
 const SAME_SIZE: f64 = 0.05;
@@ -190,10 +206,12 @@ impl Segmentation {
     /// The factor to multiply the working scale by so that these cables (in photo
     /// pixels, found at `frame`) would be [`Params::nominal_width_px`] wide: `None`
     /// when their width ([`measured_width`]) is within [`Params::width_tolerance`] of
-    /// nominal, or when there is no cable to measure. Bounded to 0.25..=2.
+    /// nominal, or when there is no cable to measure. Bounded to
+    /// [`MIN_CORRECTION`]..=[`MAX_CORRECTION`].
     pub fn width_correction(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let ratio = self.width_ratio(frame, params)?;
-        off_by_more(ratio, params.width_tolerance).then(|| ratio.clamp(0.25, 2.0))
+        off_by_more(ratio, params.width_tolerance)
+            .then(|| ratio.clamp(MIN_CORRECTION, MAX_CORRECTION))
     }
 
     /// The factor to draw these cables' masks wider by (found at `frame`, not to be
@@ -205,7 +223,7 @@ impl Segmentation {
     pub fn mask_correction(&self, frame: &WorkingFrame, params: &Params) -> f32 {
         match self.width_ratio(frame, params) {
             Some(ratio) if off_by_more(ratio, params.mask_width_tolerance) => {
-                (1.0 / ratio.clamp(0.25, 2.0)) as f32
+                (1.0 / ratio.clamp(MIN_CORRECTION, MAX_CORRECTION)) as f32
             }
             _ => 1.0,
         }
@@ -229,6 +247,21 @@ impl Segmentation {
     pub fn mask_width(&self, mask_width_px: f32) -> f32 {
         mask_width_px * self.mask_scale / self.working_scale
     }
+}
+
+/// True when the cables look too wide for the network at the working size: its field
+/// seen at half that size (`half`) calls more than `ratio` times the share of the
+/// photo cable that its field at the working size (`full`) does, on at least
+/// [`WIDE_MIN_CELLS`] cells. The network learnt cables about 5-16 px wide at 640x480;
+/// cables two or three times wider it calls cable only along their edges, or not at
+/// all, and the engine finds nothing to measure. At half the size a cell covers four
+/// times the photo, so the shares of the two fields compare as they are; on the
+/// development photos, as taken or enlarged up to twofold, the half-size field's share
+/// is 0.9-1.9 times the other's (README, "Any camera").
+pub fn too_wide_for_the_field(full: &CableField, half: &CableField, ratio: f32) -> bool {
+    let share = half.cable_share(FIELD_CABLE_LEVEL);
+    share * half.cable.len() as f32 >= WIDE_MIN_CELLS
+        && share > ratio * full.cable_share(FIELD_CABLE_LEVEL)
 }
 
 /// True when `ratio` lies outside `1 / tolerance ..= tolerance`.

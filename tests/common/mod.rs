@@ -8,15 +8,14 @@ use ariadne_dlo::detect::EndpointDetector;
 use ariadne_dlo::engine::{Deadline, MaskKind, Params};
 use ariadne_dlo::{eval, pipeline};
 
-/// The pipeline on an image file with no given ends (the network finds them), its
-/// binary mask drawn but not encoded; `overlap` as in [`pipeline::Job::overlap`].
-pub fn photo_alone(
-    bytes: &[u8],
-    network: &dyn EndpointDetector,
-    params: &Params,
-    overlap: bool,
-) -> pipeline::Output {
-    pipeline::run(&pipeline::Job {
+/// A job on an image file with no given ends (the network finds them), its binary mask
+/// drawn but not encoded, the network beside SLIC.
+pub fn job<'a>(
+    bytes: &'a [u8],
+    network: &'a dyn EndpointDetector,
+    params: &'a Params,
+) -> pipeline::Job<'a> {
+    pipeline::Job {
         bytes,
         ends: None,
         network: Some(network),
@@ -26,7 +25,20 @@ pub fn photo_alone(
         overlay: false,
         encode: false,
         deadline: Deadline::NONE,
+        overlap: true,
+    }
+}
+
+/// The pipeline on [`job`]; `overlap` as in [`pipeline::Job::overlap`].
+pub fn photo_alone(
+    bytes: &[u8],
+    network: &dyn EndpointDetector,
+    params: &Params,
+    overlap: bool,
+) -> pipeline::Output {
+    pipeline::run(&pipeline::Job {
         overlap,
+        ..job(bytes, network, params)
     })
     .expect("the pipeline runs")
 }

@@ -63,6 +63,12 @@ pub struct Params {
     /// (no second pass), the masks are drawn that much wider or thinner than
     /// `mask_width_px` (README, "Any camera").
     pub mask_width_tolerance: f32,
+    /// Cables too wide for the network (a camera much closer than the development
+    /// photos'): when the cable field seen at half the working size calls more than
+    /// this many times the share of the photo cable that the field at the working size
+    /// does, the photo is worked at half the size, and again at a quarter (`scale`,
+    /// [`super::too_wide_for_the_field`]). 100: never.
+    pub wide_field_ratio: f32,
 
     // --- graph ---
     /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
@@ -304,6 +310,7 @@ impl Default for Params {
             nominal_width_px: 7.8,
             width_tolerance: 1.4,
             mask_width_tolerance: 1.3,
+            wide_field_ratio: 2.5,
             hist_bins: 4,
             neighbourhood_order: 3,
             jump_order: 5,
@@ -426,9 +433,16 @@ impl Params {
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
             width_tolerance: 100.0,
+            wide_field_ratio: 100.0,
             end_confirm_px: 0.0,
             ..Self::default()
         }
+    }
+
+    /// Whether the network is asked about cables too wide for it
+    /// ([`Params::wide_field_ratio`] under 100).
+    pub fn probes_wide_cables(&self) -> bool {
+        self.wide_field_ratio < 100.0
     }
 
     /// The least score of a reported cable: `field_min_cable_score` when a cable field

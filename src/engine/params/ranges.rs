@@ -41,6 +41,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("nominal_width_px", 1.0, 100.0),
     ("width_tolerance", 1.0, 100.0),
     ("mask_width_tolerance", 1.0, 100.0),
+    ("wide_field_ratio", 1.0, 100.0),
     ("hist_bins", 1.0, 16.0),
     ("neighbourhood_order", 1.0, 8.0),
     ("jump_order", 1.0, 12.0),
