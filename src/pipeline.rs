@@ -200,8 +200,9 @@ struct Pass {
 }
 
 impl Pass {
-    /// The pass at `frame`; with `probe` (and a cable-field network) the network also
-    /// looks at half that size, to tell cables too wide for it.
+    /// The pass at `frame`; with `probe` (and a cable-field network whose field sees
+    /// little cable) the network also looks at half that size, to tell cables too wide
+    /// for it.
     fn run(
         job: &Job<'_>,
         photo: &RgbImage,
@@ -232,7 +233,7 @@ impl Pass {
             let t = Instant::now();
             let seen = network.detect_as(source, frame.working)?;
             let too_wide = match &seen.field {
-                Some(full) if probe => {
+                Some(full) if probe && engine::field_may_miss_wide_cables(full) => {
                     let half = frame.working.map(|v| (v / 2).max(1));
                     let coarse = network.detect_as(source, half)?;
                     coarse.field.is_some_and(|half| {

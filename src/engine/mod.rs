@@ -46,7 +46,10 @@ pub use error::{EngineError, compact};
 pub use field::CableField;
 pub use params::{PRESET_NAMES, Params, RANGES};
 pub use render::{Mask, MaskKind};
-pub use scale::{MAX_CORRECTION, MIN_CORRECTION, WorkingFrame, too_wide_for_the_field};
+pub use scale::{
+    MAX_CORRECTION, MIN_CORRECTION, WorkingFrame, field_may_miss_wide_cables,
+    too_wide_for_the_field,
+};
 
 use crate::timings::{Timings, ms_since as ms};
 use cable::Scene;
