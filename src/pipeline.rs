@@ -118,24 +118,29 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     }
     let (mut frame, mut k) = (frame, 1.0);
     let mut pass = Pass::run(job, &photo, frame, true)?;
+    // The photo once more with the working scale times `k`, the passes' times added up.
+    let again = |earlier: &Pass, k: f64, probe: bool| {
+        let frame = WorkingFrame::corrected(width, height, job.params, k);
+        let mut pass = Pass::run(job, &photo, frame, probe)?;
+        pass.timings.add(&earlier.timings);
+        Ok::<_, PipelineError>((pass, frame))
+    };
     // Cables too wide for the network to see (a camera much closer): at half the size,
     // and at a quarter if the field asks again (README, "Any camera").
     while pass.too_wide {
-        let earlier = pass.timings;
         k *= 0.5;
-        frame = WorkingFrame::corrected(width, height, job.params, k);
-        pass = Pass::run(job, &photo, frame, k > MIN_CORRECTION)?;
-        pass.timings.add(&earlier);
+        (pass, frame) = again(&pass, k, k > MIN_CORRECTION)?;
     }
     // Cables far wider or thinner than the engine's lengths suit (a closer or farther
     // camera): once more at the scale that makes them nominal (README, "Any camera").
-    let correction = pass.segmentation.width_correction(&frame, job.params);
-    if let Some(c) = correction.filter(|&c| (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION) != k) {
-        let earlier = pass.timings;
-        k = (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION);
-        frame = WorkingFrame::corrected(width, height, job.params, k);
-        pass = Pass::run(job, &photo, frame, false)?;
-        pass.timings.add(&earlier);
+    let corrected = pass
+        .segmentation
+        .width_correction(&frame, job.params)
+        .map(|c| (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION))
+        .filter(|&next| next != k);
+    if let Some(next) = corrected {
+        k = next;
+        (pass, frame) = again(&pass, k, false)?;
     }
     // Masks as wide as the cables read. Wide cables read sub-linearly, so shrunk
     // photos' cables can still read wider than nominal: their masks follow, never
