@@ -26,10 +26,10 @@ pub const MAX_CORRECTION: f64 = 2.0;
 
 /// Share of the best cable's score from which a cable's width counts in the width
 /// reading ([`Segmentation::width_correction`], [`Segmentation::mask_correction`]).
-/// Thin strokes of a printed background that the network takes for short cables score far below the real cables
-/// beside them (0.02-0.07, once 0.49, against 0.65-0.75 on the synthetic textured
-/// scenes), and as the many they decided the median: a photo of 8-12 px cables read
-/// 3.1 px and was enlarged twice, where hardly anything was found.
+/// Thin strokes of a printed background that the network takes for short cables score
+/// far below the real cables beside them (0.02-0.07, once 0.49, against 0.65-0.75 on
+/// the synthetic textured scenes), and as the many they decided the median: a photo of
+/// 8-12 px cables read 3.1 px and was enlarged twice, where hardly anything was found.
 const CREDIBLE_SCORE_SHARE: f32 = 0.25;
 
 /// Cable probability from which a field cell counts as cable for
@@ -38,11 +38,11 @@ const FIELD_CABLE_LEVEL: f32 = 0.5;
 
 /// Fewest cable cells the field at half the working size must show to say the cables
 /// are too wide: about 150 px of one cable at 640x480 (a cell is 16 photo px there).
-const WIDE_MIN_CELLS: f32 = 10.0;
+const WIDE_MIN_CELLS: usize = 10;
 
 /// Share of cable cells from which the field at the working size is taken to see the
 /// photo's cables, so that nothing is asked at half the size: the development photos'
-/// fields call 6.5-13 % of their cells cable, those of two cables 24 or 32 px wide at
+/// fields call 6.6-13.3 % of their cells cable, those of two cables 24 or 32 px wide at
 /// 640x480 under 1.4 %.
 const SEEN_SHARE: f32 = 0.02;
 
@@ -284,9 +284,13 @@ impl Segmentation {
 /// development photos, as taken or enlarged up to twofold, the half-size field's share
 /// is 0.9-1.9 times the other's (README, "Any camera").
 pub fn too_wide_for_the_field(full: &CableField, half: &CableField, ratio: f32) -> bool {
-    let share = half.cable_share(FIELD_CABLE_LEVEL);
-    share * half.cable.len() as f32 >= WIDE_MIN_CELLS
-        && share > ratio * full.cable_share(FIELD_CABLE_LEVEL)
+    let cells = half
+        .cable
+        .iter()
+        .filter(|&&p| p >= FIELD_CABLE_LEVEL)
+        .count();
+    cells >= WIDE_MIN_CELLS
+        && half.cable_share(FIELD_CABLE_LEVEL) > ratio * full.cable_share(FIELD_CABLE_LEVEL)
 }
 
 /// True when `ratio` lies outside `1 / tolerance ..= tolerance`.
