@@ -4,9 +4,12 @@
 
 #![allow(clippy::unwrap_used)] // test code: a failure should panic
 
+mod common;
+
 use ariadne_dlo::engine::{MaskKind, Params, render};
 use ariadne_dlo::pipeline::{self, Job, Output};
 use ariadne_dlo::synth::{Background, Scene, SceneSpec, scene};
+use common::{mask, mask_iou};
 use image::codecs::jpeg::JpegEncoder;
 use image::{DynamicImage, GrayImage, Luma, Rgb, RgbImage, metadata::Orientation};
 
@@ -80,19 +83,6 @@ fn assert_found(out: &Output, truth: &Scene, tol: f32) {
             .fold(f32::MAX, f32::min);
         assert!(d <= tol, "true end {p:?} is {d:.1} px from every found end");
     }
-}
-
-/// The output's binary mask.
-fn mask(out: &Output) -> &GrayImage {
-    let render::Mask::Gray(mask) = &out.mask else {
-        unreachable!("binary masks are single-channel")
-    };
-    mask
-}
-
-/// IoU of the output's binary mask with the truth.
-fn mask_iou(out: &Output, truth: &GrayImage) -> f64 {
-    ariadne_dlo::eval::iou(mask(out), truth)
 }
 
 /// Two random cables on a plain background (of the synthetic scenes, pairs are seldom

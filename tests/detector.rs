@@ -261,10 +261,7 @@ fn cables_too_wide_for_the_network_are_found_at_a_smaller_scale() {
                 .unwrap()
             };
             let (out, off) = (run(&Params::default()), run(&never));
-            let iou = |o: &ariadne_dlo::pipeline::Output| match &o.mask {
-                engine::Mask::Gray(m) => eval::iou(m, &truth.mask),
-                _ => unreachable!("a binary mask was asked for"),
-            };
+            let iou = |o: &ariadne_dlo::pipeline::Output| common::mask_iou(o, &truth.mask);
             let scale = out.segmentation.working_scale;
             eprintln!(
                 "seed {seed}, given ends {}: working scale {scale}, mask IoU {:.3}, {:.3} unprobed",

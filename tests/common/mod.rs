@@ -5,8 +5,22 @@
 pub mod app;
 
 use ariadne_dlo::detect::EndpointDetector;
-use ariadne_dlo::engine::{Deadline, MaskKind, Params};
+use ariadne_dlo::engine::{Deadline, Mask, MaskKind, Params};
 use ariadne_dlo::{eval, pipeline};
+use image::GrayImage;
+
+/// The output's binary mask.
+pub fn mask(out: &pipeline::Output) -> &GrayImage {
+    let Mask::Gray(mask) = &out.mask else {
+        unreachable!("binary masks are single-channel")
+    };
+    mask
+}
+
+/// IoU of the output's binary mask with the truth.
+pub fn mask_iou(out: &pipeline::Output, truth: &GrayImage) -> f64 {
+    eval::iou(mask(out), truth)
+}
 
 /// A job on an image file with no given ends (the network finds them), its binary mask
 /// drawn but not encoded, the network beside SLIC.
