@@ -135,8 +135,9 @@ fn cables_from(
     // seeds' floor rises above any cable's; a hypothesis below it could only have
     // claimed ends from others below it, so dropping it in the pairing keeps the rest.
     let floor = min_score.max(p.cable_score_floor(terrain.field.is_some()));
-    // Walks from the border are not joined where they leave it again (no field given).
-    let picked = pairing::pair(&crossing, &confidence, p, floor, None);
+    // Walks from the border are not joined where they leave it again (no field given),
+    // and these seeds are no cable's ends, so a cable may run on behind them.
+    let picked = pairing::pair(&crossing, &confidence, p, floor, 1.0, None);
     let seed_scene = Scene {
         walks: &crossing,
         seeds,

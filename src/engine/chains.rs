@@ -162,6 +162,7 @@ mod tests {
             length_px: 10.0 * vertices.len() as f32,
             end_heading: [1.0, 0.0],
             end_point: [0.0, 0.0],
+            through: false,
         }
     }
 

@@ -253,6 +253,7 @@ pub fn segment_oversegmented(
         confidence,
         params,
         params.cable_score_floor(field.is_some()),
+        params.field_through_factor,
         field,
     );
     timings.walks = ms(t);

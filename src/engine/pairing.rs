@@ -51,14 +51,19 @@ pub struct Pairing {
 /// that no second end confirms rests on its start end alone, so its score is scaled by
 /// that end's confidence. Hypotheses scoring below `min_score` are dropped
 /// ([`Params::cable_score_floor`]). Walks that leave the frame are joined only where
-/// `field` shows the cable between them. The result is ordered by decreasing score.
+/// `field` shows the cable between them. A walk along a cable that runs on behind its
+/// end ([`Walk::through`]) follows a cable passing the end, not the end's own, and its
+/// score is multiplied by `through_factor` (1 where the seeds are no cable's ends).
+/// The result is ordered by decreasing score.
 pub fn pair(
     walks: &[Walk],
     confidence: &[f32],
     params: &Params,
     min_score: f32,
+    through_factor: f32,
     field: Option<&CableField>,
 ) -> Vec<Pairing> {
+    let passing = |w: &Walk| if w.through { through_factor } else { 1.0 };
     let n_seeds = confidence.len();
     // Which ordered (from, to) closures exist, to find confirmed pairs.
     let closes = |from: usize, to: usize| {
@@ -83,11 +88,11 @@ pub fn pair(
                 far,
                 walk: i,
                 joined: None,
-                score: w.quality(params) * factor,
+                score: w.quality(params) * factor * passing(w),
             }
         })
         .collect();
-    hypotheses.extend(joins(walks, confidence, params, field));
+    hypotheses.extend(joins(walks, confidence, params, field, &passing));
     hypotheses.retain(|h| h.score >= min_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
@@ -112,12 +117,13 @@ pub fn pair(
 /// cable between their exits ([`grazes`]), whose heads face each other within
 /// `join_radius_px`, each turning at most `max_turn_deg` to meet the other; scored by
 /// the geometric means of the two walks' qualities and of their ends' confidences,
-/// times `unconfirmed_factor` for lost walks.
+/// times `unconfirmed_factor` for lost walks and by `passing` of each walk.
 fn joins(
     walks: &[Walk],
     confidence: &[f32],
     params: &Params,
     field: Option<&CableField>,
+    passing: &dyn Fn(&Walk) -> f32,
 ) -> Vec<Pairing> {
     let cos_max = params.max_turn_deg.to_radians().cos();
     let open: Vec<(usize, &Walk)> = walks
@@ -172,7 +178,9 @@ fn joins(
                     * confidence[a.seed]
                     * confidence[b.seed])
                     .sqrt()
-                    * factor,
+                    * factor
+                    * passing(a)
+                    * passing(b),
             });
         }
     }
@@ -201,6 +209,7 @@ mod tests {
             length_px: 100.0,
             end_heading: [1.0, 0.0],
             end_point: [0.0, 0.0],
+            through: false,
         }
     }
 
@@ -214,7 +223,7 @@ mod tests {
             walk(2, WalkEnd::Border, 0.7),
             walk(3, WalkEnd::Lost, 0.9),
         ];
-        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score, None);
+        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score, 1.0, None);
         assert_eq!(got.len(), 3);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
         assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
@@ -241,6 +250,7 @@ mod tests {
             &[1.0; 2],
             &p,
             p.min_cable_score,
+            1.0,
             None,
         );
         assert_eq!(got.len(), 1);
@@ -248,7 +258,7 @@ mod tests {
         // Heads pointing the same way do not meet.
         b.end_heading = [1.0, 0.0];
         assert!(
-            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score, None)
+            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score, 1.0, None)
                 .iter()
                 .all(|h| h.joined.is_none())
         );
@@ -277,7 +287,14 @@ mod tests {
             orientation: vec![[1.0, 0.0]; 200],
         };
         let grazing = field(0.9);
-        let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, Some(&grazing));
+        let got = pair(
+            &walks,
+            &[1.0; 2],
+            &p,
+            p.min_cable_score,
+            1.0,
+            Some(&grazing),
+        );
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         assert_eq!(got[0].score, walks[0].quality(&p));
@@ -285,10 +302,24 @@ mod tests {
         // cables, each through the border.
         let left = field(0.0);
         for field in [Some(&left), None] {
-            let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, field);
+            let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, 1.0, field);
             assert_eq!(got.len(), 2);
             assert!(got.iter().all(|h| h.far == FarEnd::Border));
         }
+    }
+
+    #[test]
+    fn walks_along_a_cable_passing_the_end_yield_to_the_end_s_own() {
+        let p = Params::default();
+        // From an end pushed against another cable: the walk along that cable (it runs
+        // on behind the end) scores a little better than the one along the end's own.
+        let mut passing = walk(0, WalkEnd::Border, 0.8);
+        passing.through = true;
+        let own = walk(0, WalkEnd::Border, 0.7);
+        let walks = [passing, own];
+        let kept = |factor| pair(&walks, &[1.0], &p, p.min_cable_score, factor, None)[0].walk;
+        assert_eq!(kept(p.field_through_factor), 1);
+        assert_eq!(kept(1.0), 0);
     }
 
     #[test]
@@ -299,7 +330,7 @@ mod tests {
         // Visual likelihood v scores v^0.5 · lost_factor: half the minimum score.
         let v = (0.5 * p.min_cable_score / p.lost_factor).powi(2);
         let weak = walk(1, WalkEnd::Lost, v);
-        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score, None).is_empty());
+        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score, 1.0, None).is_empty());
     }
 
     #[test]
@@ -308,7 +339,7 @@ mod tests {
         // A lost walk scoring midway between the two floors.
         let score = 0.5 * (p.field_min_cable_score + p.min_cable_score);
         let weak = [walk(0, WalkEnd::Lost, (score / p.lost_factor).powi(2))];
-        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field), None).len();
+        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field), 1.0, None).len();
         assert!(p.field_min_cable_score < p.min_cable_score);
         assert_eq!(kept(true), 1);
         assert_eq!(kept(false), 0);
@@ -326,7 +357,14 @@ mod tests {
         // A weak detection leaving through the frame (scoring half the minimum) is
         // dropped; a confirmed pair of weak detections is kept at full score.
         let weak = 0.5 * p.min_cable_score / (p.border_factor * walks[1].quality(&p));
-        let got = pair(&walks, &[1.0, weak, 0.4, 0.4], &p, p.min_cable_score, None);
+        let got = pair(
+            &walks,
+            &[1.0, weak, 0.4, 0.4],
+            &p,
+            p.min_cable_score,
+            1.0,
+            None,
+        );
         assert_eq!(got.len(), 2);
         assert_eq!((got[0].start, got[0].score), (2, walks[2].quality(&p)));
         assert_eq!(got[1].start, 0);

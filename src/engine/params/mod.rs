@@ -267,6 +267,11 @@ pub struct Params {
     /// no direction): a walk passing the tip of a cable that ends against its side (a
     /// T-junction) goes on. 0 closes on every end within reach.
     pub field_close_min_alignment: f32,
+    /// A walk along a cable that runs on behind its seed, the way it opens (the field
+    /// and the photo show the same cable there: a cable that passes the end, the end's
+    /// tip pushed against it), has its hypothesis score multiplied by this (README,
+    /// "How the engine uses the field"). 1: no such rule.
+    pub field_through_factor: f32,
     /// Exponent of the walk's mean cable probability in its quality.
     pub quality_field_exponent: f32,
     /// Cable probability from which a point counts as on a cable (centreline share,
@@ -374,6 +379,7 @@ impl Default for Params {
             field_gap_min_cable: 0.02,
             field_trust: 0.6,
             field_close_min_alignment: 0.25,
+            field_through_factor: 0.5,
             quality_field_exponent: 1.0,
             field_level: 0.3,
             field_min_share: 0.15,

@@ -49,8 +49,8 @@
 mod step;
 
 use super::color::LabImage;
-use super::field::{CableField, VertexField, alignment};
-use super::geometry::{border_exit, dist, heading, norm};
+use super::field::{CableField, GAP_SAMPLE_PX, VertexField, alignment};
+use super::geometry::{border_exit, dist, dist3, heading, norm};
 use super::graph::{Graph, Neighbourhood};
 use super::{Deadline, EngineError, Params};
 
@@ -99,6 +99,10 @@ pub struct Walk {
     /// Position of the walk's head, pixels; for a walk that left through the border,
     /// where its final heading comes within `EXIT_INSET_PX` of the frame.
     pub end_point: [f32; 2],
+    /// Whether the cable it follows runs on behind its seed (see
+    /// [`Walker::runs_on_behind`]): the walk follows a cable that passes the end, not
+    /// the end's own cable. Always false without a field.
+    pub through: bool,
 }
 
 impl Walk {
@@ -151,6 +155,18 @@ pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, Engin
     }
     Ok(walks)
 }
+
+/// How many superpixel steps out from its seed a walk's opening direction is read
+/// ([`Walker::runs_on_behind`]).
+const OPENING_STEPS: f32 = 2.0;
+/// How many of a walk's first superpixels give the colour of the cable it opens along.
+const OPENING_VERTICES: usize = 3;
+/// Least agreement of the field's direction behind a seed with a walk's opening
+/// direction for the cable to run on there (0.9: within about 18°).
+const THROUGH_MIN_ALIGNMENT: f32 = 0.8;
+/// Largest Lab distance from the walk's opening colour for the photo behind a seed to
+/// be the same cable.
+const THROUGH_MAX_LAB: f32 = 20.0;
 
 /// How far inside the frame a border walk's exit is placed (`Walk::end_point`), so
 /// that what is read there is the photo's last pixels.
@@ -314,9 +330,11 @@ impl<'a> Walker<'a> {
             WalkEnd::Border => self.exit(head, end_heading).unwrap_or(head),
             _ => head,
         };
+        let through = self.runs_on_behind(seed.point, &points, &vertices);
         Some(Walk {
             end_heading,
             end_point,
+            through,
             seed: s,
             end,
             visual: (log_visual / n).exp(),
@@ -326,6 +344,57 @@ impl<'a> Walker<'a> {
             length_px: length,
             vertices,
         })
+    }
+
+    /// Whether the cable a walk opens along runs on behind its seed: over most of the
+    /// samples one to two superpixel steps back from `seed` against the walk's opening
+    /// direction (from the seed to its first point `OPENING_STEPS` steps out), the
+    /// field calls cable (`field_level`), runs along that direction
+    /// (`THROUGH_MIN_ALIGNMENT`) and the photo has the colour of the walk's first
+    /// superpixels (within `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end:
+    /// behind it lie its metal tip and the background. A cable that passes the end (one
+    /// the end's tip is pushed against) runs on.
+    fn runs_on_behind(&self, seed: [f32; 2], points: &[[f32; 2]], vertices: &[u32]) -> bool {
+        let Some(field) = self.field_map else {
+            return false;
+        };
+        let reach = OPENING_STEPS * self.side_px;
+        let Some(&out) = points
+            .iter()
+            .find(|q| dist(**q, seed) >= reach)
+            .or(points.last())
+        else {
+            return false;
+        };
+        let d = dist(out, seed);
+        if d < 1e-3 {
+            return false;
+        }
+        let u = [(out[0] - seed[0]) / d, (out[1] - seed[1]) / d];
+        let first = &vertices[1..vertices.len().min(1 + OPENING_VERTICES)];
+        let mut colour = [0.0f32; 3];
+        for &v in first {
+            let lab = self.graph.vertices[v as usize].mean_lab;
+            for (c, l) in colour.iter_mut().zip(lab) {
+                *c += l / first.len() as f32;
+            }
+        }
+        let (w, h) = (self.lab.width, self.lab.height);
+        let samples = ((self.side_px / GAP_SAMPLE_PX).ceil() as usize).max(1);
+        let on = (0..=samples)
+            .filter(|&k| {
+                let r = self.side_px * (1.0 + k as f32 / samples as f32);
+                let (x, y) = (seed[0] - u[0] * r, seed[1] - u[1] * r);
+                if x < 0.0 || y < 0.0 || x > (w - 1) as f32 || y > (h - 1) as f32 {
+                    return false;
+                }
+                let at = self.lab.at(y.round() as usize * w + x.round() as usize);
+                field.cable_at(x, y) >= self.params.field_level
+                    && alignment(u, field.orientation_at(x, y)) >= THROUGH_MIN_ALIGNMENT
+                    && dist3(at, colour) <= THROUGH_MAX_LAB
+            })
+            .count();
+        2 * on > samples + 1
     }
 
     /// Where a ray from `from` along `dir` comes within `EXIT_INSET_PX` of the frame.
@@ -420,12 +489,17 @@ mod tests {
     use super::*;
     use crate::engine::superpixels::Superpixels;
 
-    /// The walks from the end of a cable on a dark line along the middle of a 200x60
-    /// grey photo cut into 20 px superpixels (ids 0-9 the top row, 10-19 the line, 20-29
-    /// the bottom row), where the field shows cable on the line's first three and last
-    /// three superpixels only (a painted line or a shadow joins two cables), under
-    /// `params`: the vertices each visits.
-    fn walks_along_a_line_the_field_breaks(params: &Params) -> Vec<Vec<u32>> {
+    /// The walks from `seeds` on a 200x60 grey photo cut into 20 px superpixels (ids
+    /// 0-9 the top row, 10-19 the middle row, 20-29 the bottom row) with a dark line
+    /// along the middle row over the columns `dark` (pixels), where the field shows
+    /// horizontal cable on the 10 px cells of the middle row for which `cable` holds
+    /// (given the cell's column), under `params`.
+    fn walks_on_a_line(
+        dark: std::ops::Range<usize>,
+        cable: impl Fn(usize) -> bool,
+        seeds: &[Seed],
+        params: &Params,
+    ) -> Vec<Walk> {
         let (w, h) = (200usize, 60usize);
         let labels: Vec<u32> = (0..w * h)
             .map(|p| ((p / w) / 20 * 10 + p % w / 20) as u32)
@@ -438,17 +512,20 @@ mod tests {
             step: 20.0,
         };
         let rgb: Vec<u8> = (0..w * h)
-            .flat_map(|p| [if (20..40).contains(&(p / w)) { 40 } else { 160 }; 3])
+            .flat_map(|p| {
+                let on = (20..40).contains(&(p / w)) && dark.contains(&(p % w));
+                [if on { 40 } else { 160 }; 3]
+            })
             .collect();
         let lab = LabImage::from_rgb(&rgb, w, h);
         let graph = Graph::build(&sp, &rgb, &lab, 3);
-        // 10 px cells: cable where the line is on x < 60 or x >= 140.
-        let cable = |i: usize| (2..4).contains(&(i / 20)) && !(6..14).contains(&(i % 20));
         let field = CableField {
             width: 20,
             height: 6,
             cell_px: [10.0, 10.0],
-            cable: (0..120).map(|i| if cable(i) { 1.0 } else { 0.0 }).collect(),
+            cable: (0..120)
+                .map(|i| f32::from((2..4).contains(&(i / 20)) && cable(i % 20)))
+                .collect(),
             orientation: vec![[1.0, 0.0]; 120],
         };
         let vertex_field = field.per_vertex(&sp);
@@ -461,16 +538,49 @@ mod tests {
             params,
             deadline: Deadline::NONE,
         };
+        walk_all(terrain, seeds).unwrap()
+    }
+
+    /// The walks from the end of a cable on a dark line along the whole middle row,
+    /// where the field shows cable on the line's first three and last three superpixels
+    /// only (a painted line or a shadow joins two cables), under `params`: the vertices
+    /// each visits.
+    fn walks_along_a_line_the_field_breaks(params: &Params) -> Vec<Vec<u32>> {
         // The end of the left cable, at the right edge of superpixel 12.
         let seeds = [Seed {
             point: [58.0, 30.0],
             vertex: 12,
         }];
-        walk_all(terrain, &seeds)
-            .unwrap()
+        walks_on_a_line(0..200, |col| !(6..14).contains(&col), &seeds, params)
             .into_iter()
             .map(|w| w.vertices)
             .collect()
+    }
+
+    #[test]
+    fn a_walk_along_a_cable_that_runs_on_behind_its_seed_is_marked() {
+        let p = Params::default();
+        // A cable from the left edge to x = 120 (its end, in superpixel 15).
+        let cable = |col: usize| col < 12;
+        let end = Seed {
+            point: [118.0, 30.0],
+            vertex: 15,
+        };
+        let walks = walks_on_a_line(0..120, cable, &[end], &p);
+        let along = walks.iter().find(|w| w.end == WalkEnd::Border);
+        assert!(along.is_some_and(|w| !w.through), "{walks:?}");
+        // From a point in its middle the cable runs on behind every walk along it.
+        let middle = Seed {
+            point: [70.0, 30.0],
+            vertex: 13,
+        };
+        let walks = walks_on_a_line(0..120, cable, &[middle], &p);
+        let on_it: Vec<&Walk> = walks
+            .iter()
+            .filter(|w| w.vertices.iter().all(|v| (10..20).contains(v)))
+            .collect();
+        assert_eq!(on_it.len(), 2, "{walks:?}");
+        assert!(on_it.iter().all(|w| w.through), "{walks:?}");
     }
 
     #[test]
