@@ -9,7 +9,7 @@
 //! network missed; a walk from one counts when it reaches another seed or the border.
 
 use super::cable::{Cable, Scene, model_cable, model_course};
-use super::chains::chain;
+use super::chains::{chain, extend};
 use super::field::CableField;
 use super::geometry::{along_one_side, dist3, median};
 use super::graph::Graph;
@@ -96,8 +96,10 @@ struct SeedCables {
 /// frame cuts whatever runs there (a board's edge, a tray's rim, a strip of table), so
 /// its profiles cannot be read, and a cable that close along a whole side would be
 /// mostly out of view.
-/// With `chained`, the seeds are no cable's ends (the ends of the field's pieces), and
-/// the cables found are chained through them into whole ones ([`chain`]).
+/// With `chained`, the seeds are no cable's ends (the ends of the field's pieces): the
+/// cables found are chained through them into whole ones ([`chain`]) and, with
+/// `field_orphan_run_on`, run on past them where a walk lost the cable further on
+/// ([`extend`]).
 fn cables_from(
     scene: &Scene<'_>,
     seeds: &[Seed],
@@ -111,11 +113,14 @@ fn cables_from(
         return Ok(Default::default());
     }
     let min_length = p.border_min_steps * sp.step;
-    let crosses = |w: &Walk| {
+    let unexplained = |w: &Walk| {
         let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
+        (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
+    };
+    let crosses = |w: &Walk| {
         matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
             && w.length_px >= min_length
-            && (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
+            && unexplained(w)
     };
     let walks = walk::walk_all(terrain, seeds)?;
     // Chaining links pieces with any walk, so only then are all of them kept.
@@ -145,7 +150,17 @@ fn cables_from(
     };
     let modelled: Vec<Cable> = if chained {
         let centroid = |v: u32| terrain.graph.vertices[v as usize].centroid;
-        chain(&crossing, &picked, &links, centroid, (p, floor))
+        let mut courses = chain(&crossing, &picked, &links, centroid, (p, floor));
+        if p.field_orphan_run_on {
+            // The ways on: walks that lost the cable, as long as a crossing walk and as
+            // little over cables already found.
+            let lost: Vec<Walk> = links
+                .into_iter()
+                .filter(|w| w.end == WalkEnd::Lost && w.length_px >= min_length && unexplained(w))
+                .collect();
+            extend(&mut courses, &lost, centroid, (p, floor));
+        }
+        courses
             .iter()
             .filter_map(|course| model_course(&seed_scene, course))
             .collect()

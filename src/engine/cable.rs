@@ -63,11 +63,15 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
     model_course(scene, &Course::of(scene.walks, choice))
 }
 
-/// The spline model of a cable along `course` (see [`model_cable`]); `None` also when
-/// the course does not start at a seed.
+/// The spline model of a cable along `course` (see [`model_cable`]). A course that
+/// starts at a seed starts exactly there, held as firmly as an end; one that starts
+/// open (a cable run on past the end of a piece of the field, [`super::chains`]) at its
+/// first superpixel; `None` when it starts at the border.
 pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> {
-    let FarEnd::Seed(start_seed) = course.ends[0] else {
-        return None;
+    let start_seed = match course.ends[0] {
+        FarEnd::Seed(s) => Some(s),
+        FarEnd::Open => None,
+        FarEnd::Border => return None,
     };
     let Scene {
         seeds,
@@ -80,14 +84,11 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
     let Terrain {
         graph, lab, params, ..
     } = terrain;
-    let start = seeds[start_seed].point;
-    let mut points = vec![start];
-    let mut weights = vec![params.end_weight];
-    points.extend(
-        course.vertices[1..]
-            .iter()
-            .map(|&v| graph.vertices[v as usize].centroid),
-    );
+    let centroid = |v: u32| graph.vertices[v as usize].centroid;
+    let start = start_seed.map(|s| seeds[s].point);
+    let mut points = vec![start.unwrap_or_else(|| centroid(course.vertices[0]))];
+    let mut weights = vec![start.map_or(1.0, |_| params.end_weight)];
+    points.extend(course.vertices[1..].iter().map(|&v| centroid(v)));
     weights.resize(points.len(), 1.0);
     // The far end's point and weight, kept through the refinement: a seed exactly, the
     // frame's edge where the cable leaves it.
@@ -135,8 +136,10 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             let mut pts = refined.points;
             let mut w = vec![1.0; pts.len()];
             // The given ends stay where they were given, an exit on the frame's edge.
-            pts[0] = start;
-            w[0] = params.end_weight;
+            if let Some(start) = start {
+                pts[0] = start;
+                w[0] = params.end_weight;
+            }
             if let Some((point, weight)) = far_anchor {
                 let last = pts.len() - 1;
                 pts[last] = point;
@@ -157,7 +160,7 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
     Some(Cable {
         id: 0,
         ends: [polyline[0], polyline[polyline.len() - 1]],
-        end_indices: [Some(start_seed), far_index],
+        end_indices: [start_seed, far_index],
         color: median_rgb(image, &polyline),
         spline,
         polyline,

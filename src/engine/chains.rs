@@ -6,6 +6,13 @@
 //! the course runs on smoothly through both joints (each turning at most
 //! `max_turn_deg`), the two are one cable: their courses are chained, best linking walk
 //! first, as long as a chain keeps a seed at one end at least.
+//!
+//! A piece ends where the field's unexplained cable ends: at a crossing with a cable
+//! already found (a link goes on there), or where the cable's probability fades before
+//! the cable does, short of the end the network missed. There the walks from the
+//! piece's seed that lost the cable are the cable's way on, to where the colour or the
+//! field gives out: a chained course that still ends on a seed runs on along the best of
+//! them that continues it smoothly ([`extend`]).
 
 use super::Params;
 use super::geometry::heading;
@@ -145,6 +152,56 @@ pub fn chain(
         .collect()
 }
 
+/// Runs every course of `courses` that ends on a seed on along the best walk of
+/// `extensions` from that seed (walks that lost the cable, over superpixels no cable
+/// explains) that scores at least `min_score` and leaves the seed turning at most
+/// `max_turn_deg` from the course's heading there; that end is then open and the
+/// course scores at most the walk's quality.
+pub fn extend(
+    courses: &mut [Course],
+    extensions: &[Walk],
+    centroid: impl Fn(u32) -> [f32; 2],
+    (params, min_score): (&Params, f32),
+) {
+    let cos_max = params.max_turn_deg.to_radians().cos();
+    let span = params.heading_span_px;
+    let centroids = |vs: &[u32]| -> Vec<[f32; 2]> { vs.iter().map(|&v| centroid(v)).collect() };
+    for course in courses.iter_mut() {
+        for end in [1, 0] {
+            let FarEnd::Seed(seed) = course.ends[end] else {
+                continue;
+            };
+            if end == 0 {
+                course.vertices.reverse();
+            }
+            let into = heading(&centroids(&course.vertices), span);
+            let best = extensions
+                .iter()
+                .filter(|w| w.seed == seed && w.end == WalkEnd::Lost)
+                .map(|w| (w.quality(params), w))
+                .filter(|&(q, _)| q >= min_score)
+                .filter(|(_, w)| {
+                    let back: Vec<[f32; 2]> = centroids(&w.vertices).into_iter().rev().collect();
+                    let out = heading(&back, span).map(|v| -v);
+                    into[0] * out[0] + into[1] * out[1] >= cos_max
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((quality, walk)) = best {
+                for &v in &walk.vertices {
+                    if course.vertices.last() != Some(&v) && !course.vertices.contains(&v) {
+                        course.vertices.push(v);
+                    }
+                }
+                course.ends[end] = FarEnd::Open;
+                course.score = course.score.min(quality);
+            }
+            if end == 0 {
+                course.vertices.reverse();
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -205,6 +262,39 @@ mod tests {
         // A link below the floor joins nothing.
         let apart = with_floor(1.1);
         assert_eq!(apart.len(), 2);
+    }
+
+    #[test]
+    fn a_piece_runs_on_along_a_walk_that_lost_the_cable_further_on() {
+        // One piece (superpixels 0-3) between seeds 0 and 1; walks from seed 1 that
+        // lost the cable: straight on over 3-7, back at a right angle over 3, 20, 21.
+        let walks = [walk(0, &[0, 1, 2, 3], 1)];
+        let lost = |vertices: &[u32], quality: f32| Walk {
+            end: WalkEnd::Lost,
+            visual: quality * quality,
+            ..walk(1, vertices, 0)
+        };
+        let at = |v: u32| match v {
+            20 | 21 => [30.0, 10.0 * (v - 19) as f32],
+            _ => on_a_line(v),
+        };
+        let p = Params::default();
+        let course = |extensions: &[Walk], floor: f32| {
+            let mut courses = chain(&walks, &[picked(0, 0, 1)], &[], at, (&p, floor));
+            extend(&mut courses, extensions, at, (&p, floor));
+            courses.remove(0)
+        };
+        let on = [lost(&[3, 4, 5, 6, 7], 0.6), lost(&[3, 20, 21], 0.9)];
+        let c = course(&on, 0.1);
+        assert_eq!(c.vertices, (0..8).collect::<Vec<u32>>());
+        assert_eq!(c.ends, [FarEnd::Seed(0), FarEnd::Open]);
+        assert_eq!(c.score, 0.5_f32.min(on[0].quality(&p)));
+        // Below the floor, or only the sharp turn: the piece stays as it was.
+        for (extensions, floor) in [(&on[..], 0.7), (&on[1..], 0.1)] {
+            let c = course(extensions, floor);
+            assert_eq!(c.vertices, [0, 1, 2, 3]);
+            assert_eq!(c.ends, [FarEnd::Seed(0), FarEnd::Seed(1)]);
+        }
     }
 
     #[test]

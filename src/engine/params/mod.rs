@@ -293,6 +293,11 @@ pub struct Params {
     pub field_orphan_level: f32,
     /// Such a piece seeds walks when its two ends lie this many superpixel steps apart.
     pub field_orphan_min_steps: f32,
+    /// A cable found from such a piece runs on past the piece's ends, along the walks
+    /// from them that lost the cable further on (where the field fades before the
+    /// cable does, short of the end the network missed; [`crate::engine`]'s README
+    /// section "How the engine uses the field").
+    pub field_orphan_run_on: bool,
 }
 
 /// Names of the built-in presets, in the order `--help` lists them.
@@ -387,6 +392,7 @@ impl Default for Params {
             field_min_cable_score: 0.03,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
+            field_orphan_run_on: true,
         }
     }
 }
