@@ -162,7 +162,7 @@ const OPENING_STEPS: f32 = 2.0;
 /// How many of a walk's first superpixels give the colour of the cable it opens along.
 const OPENING_VERTICES: usize = 3;
 /// Least agreement of the field's direction behind a seed with a walk's opening
-/// direction for the cable to run on there (0.9: within about 18°).
+/// direction for the cable to run on there (0.8: within about 26°).
 const THROUGH_MIN_ALIGNMENT: f32 = 0.8;
 /// Largest Lab distance from the walk's opening colour for the photo behind a seed to
 /// be the same cable.
