@@ -152,13 +152,13 @@ fn cables_from(
         let centroid = |v: u32| terrain.graph.vertices[v as usize].centroid;
         let mut courses = chain(&crossing, &picked, &links, centroid, (p, floor));
         if p.field_orphan_run_on {
-            // The ways on: walks that lost the cable, as long as a crossing walk and as
-            // little over cables already found.
-            let lost: Vec<Walk> = links
+            // The ways on ([`extend`] takes those that lost the cable): as long as a
+            // crossing walk and as little over cables already found.
+            let ways_on: Vec<Walk> = links
                 .into_iter()
-                .filter(|w| w.end == WalkEnd::Lost && w.length_px >= min_length && unexplained(w))
+                .filter(|w| w.length_px >= min_length && unexplained(w))
                 .collect();
-            extend(&mut courses, &lost, centroid, (p, floor));
+            extend(&mut courses, &ways_on, centroid, (p, floor));
         }
         courses
             .iter()
