@@ -122,7 +122,9 @@ fn cables_from(
             && w.length_px >= min_length
             && unexplained(w)
     };
-    let walks = walk::walk_all(terrain, seeds)?;
+    // Border and piece seeds are no cable's ends: nothing passes them (`pair` gets
+    // a through factor of 1).
+    let walks = walk::walk_all(terrain, seeds, false)?;
     // Chaining links pieces with any walk, so only then are all of them kept.
     let (crossing, links): (Vec<Walk>, Vec<Walk>) = if chained {
         (

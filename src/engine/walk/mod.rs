@@ -137,8 +137,14 @@ pub struct Terrain<'a> {
     pub deadline: Deadline,
 }
 
-/// Runs all walks from all seeds.
-pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, EngineError> {
+/// Runs all walks from all seeds; `read_through` says whether to read
+/// [`Walk::through`] (false leaves it false: where the seeds are no cable's ends, or
+/// nothing reads it).
+pub fn walk_all(
+    terrain: Terrain<'_>,
+    seeds: &[Seed],
+    read_through: bool,
+) -> Result<Vec<Walk>, EngineError> {
     let graph = terrain.graph;
     let deadline = terrain.deadline;
     let mut walker = Walker::new(terrain, seeds);
@@ -148,7 +154,7 @@ pub fn walk_all(terrain: Terrain<'_>, seeds: &[Seed]) -> Result<Vec<Walk>, Engin
         let (region, firsts) = seed_region(graph, seed, near_px);
         for first in firsts {
             deadline.check()?;
-            if let Some(w) = walker.run(s, &region, first) {
+            if let Some(w) = walker.run(s, &region, first, read_through) {
                 walks.push(w);
             }
         }
@@ -255,8 +261,8 @@ impl<'a> Walker<'a> {
     }
 
     /// One walk from seed `s` (whose region is `region`) whose first step goes to
-    /// `first`.
-    fn run(&mut self, s: usize, region: &[u32], first: u32) -> Option<Walk> {
+    /// `first`; `read_through` as for [`walk_all`].
+    fn run(&mut self, s: usize, region: &[u32], first: u32, read_through: bool) -> Option<Walk> {
         let p = self.params;
         let seed = self.seeds[s];
         self.walk_id += 1;
@@ -330,7 +336,7 @@ impl<'a> Walker<'a> {
             WalkEnd::Border => self.exit(head, end_heading).unwrap_or(head),
             _ => head,
         };
-        let through = self.runs_on_behind(seed.point, &points, &vertices);
+        let through = read_through && self.runs_on_behind(seed.point, &points, &vertices);
         Some(Walk {
             end_heading,
             end_point,
@@ -538,7 +544,7 @@ mod tests {
             params,
             deadline: Deadline::NONE,
         };
-        walk_all(terrain, seeds).unwrap()
+        walk_all(terrain, seeds, true).unwrap()
     }
 
     /// The walks from the end of a cable on a dark line along the whole middle row,
