@@ -122,8 +122,8 @@ fn cables_from(
             && w.length_px >= min_length
             && unexplained(w)
     };
-    // Border and piece seeds are no cable's ends: nothing passes them (`pair` gets
-    // a through factor of 1).
+    // Border and piece seeds are no cable's ends, so a cable running on behind one
+    // tells nothing (`pair` below gets a through factor of 1): not read.
     let walks = walk::walk_all(terrain, seeds, false)?;
     // Chaining links pieces with any walk, so only then are all of them kept.
     let (crossing, links): (Vec<Walk>, Vec<Walk>) = if chained {

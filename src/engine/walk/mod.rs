@@ -101,7 +101,8 @@ pub struct Walk {
     pub end_point: [f32; 2],
     /// Whether the cable it follows runs on behind its seed (see
     /// [`Walker::runs_on_behind`]): the walk follows a cable that passes the end, not
-    /// the end's own cable. Always false without a field.
+    /// the end's own cable. Always false without a field, and where [`walk_all`] is
+    /// not asked to read it.
     pub through: bool,
 }
 
