@@ -4,14 +4,17 @@
 Backgrounds from white to black and saturated card, cables of every colour (black and
 white among them) that cross, run out of the frame at both ends, or end in view with a
 metal terminal; shaded (a darker rim, a lighter core), 7-11 px wide at 640x480, smooth
-(bends no tighter than about 40 px). One folder per background kind, so that
-`ariadne eval --dataset DIR` reports each kind on its own row:
+(bends no tighter than about 40 px); and two kinds on any of those backgrounds: thin
+rods 3-5 px wide with blunt ends (`thin`), and pairs of same-colour cables lying side by
+side, 0-4 px apart (`pairs`). One folder per kind, so that `ariadne eval --dataset DIR`
+reports each kind on its own row:
 
     training/.venv/bin/python scripts/stress.py /tmp/stress
     target/release/ariadne eval --dataset /tmp/stress --endpoints detect
 
 Each photo has `NNNNN.jpg` (quality 90), its centrelines `NNNNN.txt` and 7 px masks
-`NNNNN_mask_K.png` / `NNNNN_mask_all.png`, as the cables dataset (its README). Seeded:
+`NNNNN_mask_K.png` / `NNNNN_mask_all.png`, as the cables dataset (its README); a rod's
+mask is as wide as the rod. Seeded:
 the same scenes every run. These scenes are drawn, not photographed, and the bundled
 network trained on drawn cables too: read them as a search for the engine's failures
 on such backgrounds and layouts, not as a forecast for photos.
@@ -36,6 +39,9 @@ BACKGROUNDS = {
     "black": [(22, 22, 25), (38, 36, 34)],
     "saturated": [(170, 40, 40), (40, 120, 60), (30, 40, 90), (220, 200, 60), (230, 130, 40)],
 }
+# One folder each: the background kinds, then thin rods and same-colour pairs on any of
+# them (appended, so the scenes of the first four stay as they were).
+KINDS = list(BACKGROUNDS) + ["thin", "pairs"]
 CABLE_COLOURS = [
     (220, 220, 215),  # white
     (35, 35, 38),  # black
@@ -123,24 +129,73 @@ def draw_cable(draw, path, colour, width):
             draw.line([tuple(end), tuple(tip)], fill=(175, 170, 160), width=int(round(width - 4)))
 
 
+def draw_rod(draw, path, colour, width):
+    """A thin rod along `path` (under 7 px): a darker rim around its colour, blunt ends."""
+    pts = [tuple(p) for p in path]
+    rim = tuple(int(c * 0.55) for c in colour)
+    draw.line(pts, fill=rim, width=int(round(width)), joint="curve")
+    draw.line(pts, fill=colour, width=max(1, int(round(width - 2))), joint="curve")
+
+
+def any_cable(rng):
+    r = rng.random()
+    return through_cable(rng) if r < 0.35 else cable_leaving(rng) if r < 0.6 else cable_in_view(rng)
+
+
+def parallel(path, offset):
+    """`path` moved `offset` px along its left normal, cut to its longest run in frame."""
+    d = np.gradient(path, axis=0)
+    n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(np.linalg.norm(d, axis=1), 1e-6)[:, None]
+    moved = path + offset * n
+    ok = np.array([inside(p, 0.0) for p in moved])
+    best, start = (0, 0), None
+    for i, v in enumerate(list(ok) + [False]):
+        if v and start is None:
+            start = i
+        elif not v and start is not None:
+            best = max(best, (i - start, start))
+            start = None
+    return moved[best[1]:best[1] + best[0]]
+
+
 def scene(rng, kind):
-    img = background(rng, kind)
+    """A photo of `kind` and its centrelines with their mask widths: a background kind
+    with cables 7-11 px wide; `thin`, rods 3-5 px wide; `pairs`, one or two pairs of
+    same-colour cables side by side (0-4 px apart) among others. The last two on any
+    background kind. Masks are the dataset's 7 px strokes, but a rod's is as wide as the
+    rod: a 7 px stroke would be wider than the object."""
+    backdrop = kind if kind in BACKGROUNDS else list(BACKGROUNDS)[rng.integers(len(BACKGROUNDS))]
+    img = background(rng, backdrop)
     draw = ImageDraw.Draw(img)
     lines = []
-    for _ in range(int(rng.integers(2, 6))):
-        r = rng.random()
-        path = through_cable(rng) if r < 0.35 else cable_leaving(rng) if r < 0.6 else cable_in_view(rng)
+    if kind == "pairs":
+        for _ in range(int(rng.integers(1, 3))):
+            path = through_cable(rng) if rng.random() < 0.5 else cable_in_view(rng)
+            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+            width = rng.uniform(7.0, 11.0)
+            twin = parallel(path, (width + rng.uniform(0.0, 4.0)) * rng.choice([-1.0, 1.0]))
+            for line in (path, twin):
+                if len(line) > 100:
+                    draw_cable(draw, line, colour, width)
+                    lines.append((line, MASK_WIDTH))
+    for _ in range(int(rng.integers(0, 3) if kind == "pairs" else rng.integers(2, 6))):
+        path = any_cable(rng)
         colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
-        draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
-        lines.append(path)
+        if kind == "thin":
+            width = rng.uniform(3.0, 5.0)
+            draw_rod(draw, path, colour, width)
+            lines.append((path, int(round(width))))
+        else:
+            draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
+            lines.append((path, MASK_WIDTH))
     return img.filter(ImageFilter.GaussianBlur(0.7)), lines
 
 
 def mask(lines):
     m = Image.new("L", (W, H), 0)
     d = ImageDraw.Draw(m)
-    for path in lines:
-        d.line([tuple(p) for p in path], fill=255, width=MASK_WIDTH, joint="curve")
+    for path, width in lines:
+        d.line([tuple(p) for p in path], fill=255, width=width, joint="curve")
     return m
 
 
@@ -151,7 +206,7 @@ def main():
     ap.add_argument("--seed", type=int, default=11)
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
-    for kind in BACKGROUNDS:
+    for kind in KINDS:
         folder = args.out / kind
         folder.mkdir(parents=True, exist_ok=True)
         for i in range(args.per_kind):
@@ -159,15 +214,15 @@ def main():
             name = f"{i:05d}"
             img.save(folder / f"{name}.jpg", quality=90)
             with open(folder / f"{name}.txt", "w") as f:
-                for path in lines:
+                for path, _ in lines:
                     keep = list(range(0, len(path), max(1, len(path) // 40)))
                     keep += [] if keep[-1] == len(path) - 1 else [len(path) - 1]
                     pts = path[keep].tolist()
                     f.write(f"{len(pts)} " + " ".join(f"{x:.1f} {y:.1f}" for x, y in pts) + "\n")
             mask(lines).save(folder / f"{name}_mask_all.png")
-            for k, path in enumerate(lines):
-                mask([path]).save(folder / f"{name}_mask_{k}.png")
-    print(f"{len(BACKGROUNDS) * args.per_kind} photos under {args.out}")
+            for k, line in enumerate(lines):
+                mask([line]).save(folder / f"{name}_mask_{k}.png")
+    print(f"{len(KINDS) * args.per_kind} photos under {args.out}")
 
 
 if __name__ == "__main__":
