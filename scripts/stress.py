@@ -138,12 +138,14 @@ def draw_rod(draw, path, colour, width):
 
 
 def any_cable(rng):
+    """A cable through the frame (35 %), leaving it at one end (25 %) or all in view."""
     r = rng.random()
     return through_cable(rng) if r < 0.35 else cable_leaving(rng) if r < 0.6 else cable_in_view(rng)
 
 
 def parallel(path, offset):
-    """`path` moved `offset` px along its left normal, cut to its longest run in frame."""
+    """`path` moved `offset` px along its normal (either side by the sign), cut to its
+    longest run inside the frame."""
     d = np.gradient(path, axis=0)
     n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(np.linalg.norm(d, axis=1), 1e-6)[:, None]
     moved = path + offset * n
