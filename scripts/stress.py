@@ -115,10 +115,15 @@ def background(rng, kind):
     return Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
 
 
+def rim_of(colour):
+    """The darker colour of a cable's or rod's rim."""
+    return tuple(int(c * 0.55) for c in colour)
+
+
 def draw_cable(draw, path, colour, width):
     """A shaded cable along `path`, a metal terminal beyond each end in view."""
     pts = [tuple(p) for p in path]
-    rim = tuple(int(c * 0.55) for c in colour)
+    rim = rim_of(colour)
     core = tuple(min(255, int(c * 1.25 + 25)) for c in colour)
     for w, c in ((width, rim), (width - 3, colour), (3, core)):
         draw.line(pts, fill=c, width=int(round(w)), joint="curve")
@@ -132,7 +137,7 @@ def draw_cable(draw, path, colour, width):
 def draw_rod(draw, path, colour, width):
     """A thin rod along `path` (under 7 px): a darker rim around its colour, blunt ends."""
     pts = [tuple(p) for p in path]
-    rim = tuple(int(c * 0.55) for c in colour)
+    rim = rim_of(colour)
     draw.line(pts, fill=rim, width=int(round(width)), joint="curve")
     draw.line(pts, fill=colour, width=max(1, int(round(width - 2))), joint="curve")
 

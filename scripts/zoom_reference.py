@@ -16,27 +16,19 @@ import argparse
 import json
 import os
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "training"))
+from scenes import read_lines, terminals  # noqa: E402
+
+# Ends nearer the border than this are where a cable leaves the frame (the evaluation's
+# terminals, `eval::dataset::terminal_ends`).
 BORDER_TOLERANCE_PX = 12.0
-
-
-def true_ends(txt, w, h):
-    """The annotated centrelines' ends off the border (the evaluation's terminals)."""
-    ends = []
-    for line in open(txt):
-        v = line.split()
-        k = int(v[0])
-        xy = list(map(float, v[1:1 + 2 * k]))
-        for x, y in ((xy[0], xy[1]), (xy[-2], xy[-1])):
-            t = BORDER_TOLERANCE_PX
-            if t <= x <= w - 1 - t and t <= y <= h - 1 - t:
-                ends.append([x, y])
-    return ends
 
 
 def main():
@@ -55,11 +47,13 @@ def main():
             w, h = Image.open(f"{stem}.jpg").size
             cmd = [args.binary, "segment", f"{stem}.jpg", "--mask", str(out)]
             if args.endpoints == "gt":
-                cmd += ["--endpoints", json.dumps(true_ends(f"{stem}.txt", w, h))]
+                ends = terminals(read_lines(Path(f"{stem}.txt")), w, h, BORDER_TOLERANCE_PX)
+                cmd += ["--endpoints", json.dumps(ends)]
             subprocess.run(cmd, check=True, capture_output=True)
             found = Image.open(out).convert("L")
             truth = Image.open(f"{stem}_mask_all.png").convert("L")
-            cables = sorted(Path(stem).parent.glob(f"{Path(stem).name}_mask_[0-9]*.png"))
+            names = sorted(Path(stem).parent.glob(f"{Path(stem).name}_mask_[0-9]*.png"))
+            cables = [Image.open(c).convert("L") for c in names]
             for z in zooms:
                 cw, ch = round(w / z), round(h / z)
                 box = ((w - cw) // 2, (h - ch) // 2, (w - cw) // 2 + cw, (h - ch) // 2 + ch)
@@ -68,7 +62,7 @@ def main():
                     return np.asarray(m.crop(box).resize((w, h), Image.BILINEAR)) > 127
 
                 p, g = view(found), view(truth)
-                in_view = sum(view(Image.open(c).convert("L")).any() for c in cables)
+                in_view = sum(view(c).any() for c in cables)
                 iou = (p & g).sum() / max(1, (p | g).sum())
                 sums[z][0] += in_view * iou
                 sums[z][1] += in_view
