@@ -4,7 +4,10 @@
 //! of the frame, or nowhere in particular (lost). Hypotheses are scored by walk quality
 //! times a factor for how they ended (a closing walk confirmed by a walk from the other
 //! end scores highest) and accepted greedily from the best down, so that each end
-//! belongs to at most one cable and no cable is reported twice.
+//! belongs to at most one cable and no cable is reported twice: not from its two ends,
+//! nor from two ends on one cable (a terminal seen twice, at its metal tip and where the
+//! insulation ends; a false end along a cable), whose walks run over the same
+//! superpixels.
 //!
 //! Two lost walks from different ends whose heads face each other across a short gap
 //! (a crossing or a glare spot they could not pass) are joined into one hypothesis
@@ -54,7 +57,9 @@ pub struct Pairing {
 /// `field` shows the cable between them. A walk along a cable that runs on behind its
 /// end ([`Walk::through`]) follows a cable passing the end, not the end's own, and its
 /// score is multiplied by `through_factor` (1 where the seeds are no cable's ends).
-/// The result is ordered by decreasing score.
+/// A hypothesis whose walks run more than `pair_max_shared` of their superpixels over
+/// those of hypotheses accepted before it repeats a cable already found and is
+/// dropped. The result is ordered by decreasing score.
 pub fn pair(
     walks: &[Walk],
     confidence: &[f32],
@@ -96,9 +101,19 @@ pub fn pair(
     hypotheses.retain(|h| h.score >= min_score);
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
+    let mut taken = vec![false; vertex_count(walks)];
     let mut accepted = Vec::new();
     for h in hypotheses {
         if used[h.start] {
+            continue;
+        }
+        let vertices = || {
+            let joined = h.joined.map_or(&[][..], |j| &walks[j].vertices[..]);
+            walks[h.walk].vertices.iter().chain(joined)
+        };
+        let (shared, all) =
+            vertices().fold((0, 0), |(s, n), &v| (s + taken[v as usize] as usize, n + 1));
+        if shared as f32 > params.pair_max_shared * all as f32 {
             continue;
         }
         if let FarEnd::Seed(t) = h.far {
@@ -108,9 +123,21 @@ pub fn pair(
             used[t] = true;
         }
         used[h.start] = true;
+        for &v in vertices() {
+            taken[v as usize] = true;
+        }
         accepted.push(h);
     }
     accepted
+}
+
+/// One more than the largest superpixel index any of `walks` visits.
+fn vertex_count(walks: &[Walk]) -> usize {
+    walks
+        .iter()
+        .flat_map(|w| w.vertices.iter())
+        .max()
+        .map_or(0, |&v| v as usize + 1)
 }
 
 /// Hypotheses joining two lost walks, or two walks that leave the frame with the
@@ -197,10 +224,12 @@ fn grazes(field: &CableField, a: [f32; 2], b: [f32; 2], params: &Params) -> bool
 mod tests {
     use super::*;
 
+    /// A walk from `seed` over superpixels of its own.
     fn walk(seed: usize, end: WalkEnd, q: f32) -> Walk {
+        let first = 2 * seed as u32;
         Walk {
             seed,
-            vertices: vec![0, 1],
+            vertices: vec![first, first + 1],
             end,
             visual: q,
             smoothness: 1.0,
@@ -235,6 +264,33 @@ mod tests {
         }));
         ends.sort_unstable();
         assert_eq!(ends, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn a_second_end_on_a_cable_found_adds_no_cable() {
+        let p = Params::default();
+        let mut a = walk(0, WalkEnd::Border, 0.9);
+        a.vertices = (0..10).collect();
+        // A metal tip seen as its own end just beyond end 0: its walk runs over the
+        // cable's superpixels, one of them its own.
+        let mut tip = walk(1, WalkEnd::Border, 0.8);
+        tip.vertices = [20].into_iter().chain(0..10).collect();
+        let got = pair(
+            &[a.clone(), tip.clone()],
+            &[1.0; 2],
+            &p,
+            p.min_cable_score,
+            1.0,
+            None,
+        );
+        assert_eq!(got.len(), 1);
+        assert_eq!(got[0].start, 0);
+        // A cable alongside, crossing the first once, is a cable of its own.
+        tip.vertices = (20..30).chain([5]).collect();
+        assert_eq!(
+            pair(&[a, tip], &[1.0; 2], &p, p.min_cable_score, 1.0, None).len(),
+            2
+        );
     }
 
     #[test]

@@ -94,6 +94,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("border_min_score", 0.0, 1.0),
     ("border_min_steps", 0.0, 1000.0),
     ("border_max_covered", 0.0, 1.0),
+    ("pair_max_shared", 0.0, 1.0),
     ("min_ridge_share", 0.0, 1.0),
     ("field_floor", 0.0, 1.0),
     ("field_alignment_weight", 0.0, 1.0),
