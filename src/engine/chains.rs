@@ -171,15 +171,21 @@ pub fn extend(
             let FarEnd::Seed(seed) = course.ends[end] else {
                 continue;
             };
-            if end == 0 {
-                course.vertices.reverse();
-            }
-            let into = heading(&centroids(&course.vertices), span);
-            let best = extensions
+            let lost: Vec<(f32, &Walk)> = extensions
                 .iter()
                 .filter(|w| w.seed == seed && w.end == WalkEnd::Lost)
                 .map(|w| (w.quality(params), w))
                 .filter(|&(q, _)| q >= min_score)
+                .collect();
+            if lost.is_empty() {
+                continue;
+            }
+            if end == 0 {
+                course.vertices.reverse();
+            }
+            let into = heading(&centroids(&course.vertices), span);
+            let best = lost
+                .into_iter()
                 .filter(|(_, w)| {
                     let back: Vec<[f32; 2]> = centroids(&w.vertices).into_iter().rev().collect();
                     let out = heading(&back, span).map(|v| -v);
