@@ -194,6 +194,11 @@ pub struct Params {
     // --- pairing details ---
     /// Lost walks shorter than this many `min_cable_length_px` are not joined.
     pub join_min_length: f32,
+    /// Largest fraction of an end's walk's superpixels that cables accepted before it
+    /// may have taken: beyond it the walk repeats a cable already found, from a second
+    /// end on it (a terminal seen twice, at its metal tip and where the insulation
+    /// ends), and is no cable of its own (1 accepts every walk).
+    pub pair_max_shared: f32,
 
     // --- model details ---
     /// Fit weight of a given end relative to one superpixel centroid (ends are exact).
@@ -232,11 +237,6 @@ pub struct Params {
     /// Largest fraction of such a walk's superpixels that may belong to cables already
     /// found (a walk along one of them explains nothing new).
     pub border_max_covered: f32,
-    /// Largest fraction of an end's walk's superpixels that cables accepted before it
-    /// may have taken: beyond it the walk repeats a cable already found, from a second
-    /// end on it (a terminal seen twice, at its metal tip and where the insulation
-    /// ends), and is no cable of its own (1 accepts every walk).
-    pub pair_max_shared: f32,
     /// Least share of the profiles across such a cable (one with no given end) that
     /// must read a ridge, a cable on its background, rather than a step between two
     /// backgrounds (`refine::Refined::ridge_share`): the edge of a board or tray is
@@ -365,6 +365,7 @@ impl Default for Params {
             quality_visual_exponent: 0.5,
             quality_contrast_exponent: 2.0,
             join_min_length: 0.5,
+            pair_max_shared: 0.45,
             end_weight: 25.0,
             far_end_trim: 0.5,
             border_exit_steps: 3.0,
@@ -380,7 +381,6 @@ impl Default for Params {
             border_min_score: 0.35,
             border_min_steps: 5.0,
             border_max_covered: 0.25,
-            pair_max_shared: 0.45,
             min_ridge_share: 0.5,
             use_field: true,
             lateral_contrast: true,
