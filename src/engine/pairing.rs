@@ -242,6 +242,20 @@ mod tests {
         }
     }
 
+    /// [`pair`] with every end fully trusted (confidence 1), the default floor, no
+    /// penalty for walks along a passing cable and no field.
+    fn pair_sure(walks: &[Walk], p: &Params) -> Vec<Pairing> {
+        let seeds = walks
+            .iter()
+            .flat_map(|w| match w.end {
+                WalkEnd::Seed(t) => vec![w.seed, t],
+                _ => vec![w.seed],
+            })
+            .max()
+            .map_or(0, |s| s + 1);
+        pair(walks, &vec![1.0; seeds], p, p.min_cable_score, 1.0, None)
+    }
+
     #[test]
     fn each_end_used_once_and_confirmed_pairs_win() {
         let p = Params::default();
@@ -252,7 +266,7 @@ mod tests {
             walk(2, WalkEnd::Border, 0.7),
             walk(3, WalkEnd::Lost, 0.9),
         ];
-        let got = pair(&walks, &[1.0; 4], &p, p.min_cable_score, 1.0, None);
+        let got = pair_sure(&walks, &p);
         assert_eq!(got.len(), 3);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
         assert_eq!((got[1].start, got[1].far), (2, FarEnd::Border));
@@ -275,22 +289,12 @@ mod tests {
         // cable's superpixels, one of them its own.
         let mut tip = walk(1, WalkEnd::Border, 0.8);
         tip.vertices = [20].into_iter().chain(0..10).collect();
-        let got = pair(
-            &[a.clone(), tip.clone()],
-            &[1.0; 2],
-            &p,
-            p.min_cable_score,
-            1.0,
-            None,
-        );
+        let got = pair_sure(&[a.clone(), tip.clone()], &p);
         assert_eq!(got.len(), 1);
         assert_eq!(got[0].start, 0);
         // A cable alongside, crossing the first once, is a cable of its own.
         tip.vertices = (20..30).chain([5]).collect();
-        assert_eq!(
-            pair(&[a, tip], &[1.0; 2], &p, p.min_cable_score, 1.0, None).len(),
-            2
-        );
+        assert_eq!(pair_sure(&[a, tip], &p).len(), 2);
     }
 
     #[test]
@@ -301,23 +305,12 @@ mod tests {
         let mut b = walk(1, WalkEnd::Lost, 0.8);
         b.end_point = [140.0, 100.0];
         b.end_heading = [-1.0, 0.0];
-        let got = pair(
-            &[a.clone(), b.clone()],
-            &[1.0; 2],
-            &p,
-            p.min_cable_score,
-            1.0,
-            None,
-        );
+        let got = pair_sure(&[a.clone(), b.clone()], &p);
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         // Heads pointing the same way do not meet.
         b.end_heading = [1.0, 0.0];
-        assert!(
-            pair(&[a, b], &[1.0; 2], &p, p.min_cable_score, 1.0, None)
-                .iter()
-                .all(|h| h.joined.is_none())
-        );
+        assert!(pair_sure(&[a, b], &p).iter().all(|h| h.joined.is_none()));
     }
 
     #[test]
@@ -386,7 +379,7 @@ mod tests {
         // Visual likelihood v scores v^0.5 · lost_factor: half the minimum score.
         let v = (0.5 * p.min_cable_score / p.lost_factor).powi(2);
         let weak = walk(1, WalkEnd::Lost, v);
-        assert!(pair(&[short, weak], &[1.0; 2], &p, p.min_cable_score, 1.0, None).is_empty());
+        assert!(pair_sure(&[short, weak], &p).is_empty());
     }
 
     #[test]
