@@ -91,8 +91,12 @@ impl CableField {
     /// Share of the grid's cells whose cable probability is at least `level` (0 for an
     /// empty grid): how much of the photo the network calls cable, whatever its size.
     pub fn cable_share(&self, level: f32) -> f32 {
-        let on = self.cable.iter().filter(|&&p| p >= level).count();
-        on as f32 / self.cable.len().max(1) as f32
+        self.cable_cells(level) as f32 / self.cable.len().max(1) as f32
+    }
+
+    /// How many of the grid's cells have a cable probability of at least `level`.
+    pub fn cable_cells(&self, level: f32) -> usize {
+        self.cable.iter().filter(|&&p| p >= level).count()
     }
 
     /// Share of the points of `line` where the cable probability is at least `level`

@@ -284,12 +284,7 @@ impl Segmentation {
 /// development photos, as taken or enlarged up to twofold, the half-size field's share
 /// is 0.9-1.9 times the other's (README, "Any camera").
 pub fn too_wide_for_the_field(full: &CableField, half: &CableField, ratio: f32) -> bool {
-    let cells = half
-        .cable
-        .iter()
-        .filter(|&&p| p >= FIELD_CABLE_LEVEL)
-        .count();
-    cells >= WIDE_MIN_CELLS
+    half.cable_cells(FIELD_CABLE_LEVEL) >= WIDE_MIN_CELLS
         && half.cable_share(FIELD_CABLE_LEVEL) > ratio * full.cable_share(FIELD_CABLE_LEVEL)
 }
 
