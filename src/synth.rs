@@ -260,11 +260,14 @@ pub enum Case {
     /// Two cables crossing at 60°, all four ends in view: with no end detected, the
     /// field shows one X-shaped piece.
     Crossing,
+    /// Two cables of the same colour laid together, a sliver of background (1 px)
+    /// between them: one band to the network and to the superpixels.
+    Twins,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 8] = [
+    pub const ALL: [Case; 9] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -273,12 +276,14 @@ impl Case {
         Case::CrossingLoop,
         Case::TerminalAgainstCable,
         Case::Crossing,
+        Case::Twins,
     ];
 
     /// Width of the case's cables, pixels.
     fn cable_width(self) -> f32 {
         match self {
             Case::SideBySideThin => 8.0,
+            Case::Twins => 9.0,
             _ => 11.0,
         }
     }
@@ -316,6 +321,22 @@ pub fn case(case: Case) -> Scene {
             (
                 [225, 222, 215],
                 vec![(a, [200, 40, 35]), (b, [200, 40, 35])],
+            )
+        }
+        Case::Twins => {
+            let a = line(&arc(110.0, 140.0, 540.0, 330.0, 0.15), 600);
+            // Beside `a` along its normals, one width and a pixel away.
+            let b = (0..a.len())
+                .map(|i| {
+                    let (p, q) = (a[i.saturating_sub(1)], a[(i + 1).min(a.len() - 1)]);
+                    let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+                    let k = (width + 1.0) / dx.hypot(dy);
+                    [a[i][0] - dy * k, a[i][1] + dx * k]
+                })
+                .collect();
+            (
+                [226, 224, 218],
+                vec![(a, [40, 90, 200]), (b, [40, 90, 200])],
             )
         }
         Case::NoEndInView => (

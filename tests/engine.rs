@@ -408,3 +408,53 @@ fn a_strip_along_the_frame_edge_is_not_a_cable() {
     assert_eq!(found, s.cables.len());
     assert!(err.iter().all(|&e| e < 3.0), "{err:?}");
 }
+
+/// Two cables of one colour laid together (`Twins`: a pixel apart) are one band to the
+/// field and to the superpixels, and the network reports one end at each end of the
+/// pair. The walk between those ends runs down the band's middle; the profiles across
+/// it show two cables, so it is reported as two, each on its own centreline and about
+/// as wide as drawn. With `twins` off it is one cable between the two.
+#[test]
+fn twins_laid_together_are_split_in_two() {
+    use ariadne_dlo::synth::Case;
+    let s = ariadne_dlo::synth::case(Case::Twins);
+    let [a, b] = [&s.cables[0].centreline, &s.cables[1].centreline];
+    let mid =
+        |p: [f32; 2], q: [f32; 2]| [f64::from(p[0] + q[0]) / 2.0, f64::from(p[1] + q[1]) / 2.0];
+    let ends = [mid(a[0], b[0]), mid(a[a.len() - 1], b[b.len() - 1])];
+    let field = exact_field(&s);
+    let run = |params: &Params| {
+        engine::segment_with_confidence(
+            &s.image,
+            &ends,
+            &[1.0, 1.0],
+            Some(&field),
+            params,
+            engine::Deadline::NONE,
+        )
+        .unwrap()
+    };
+    let seg = run(&Params::default());
+    assert_eq!(seg.cables.len(), 2);
+    for truth in [a, b] {
+        let err = seg
+            .cables
+            .iter()
+            .map(|c| centreline_error(truth, &c.polyline))
+            .fold(f32::MAX, f32::min);
+        assert!(err < 2.0, "centreline error {err}");
+    }
+    for cable in &seg.cables {
+        assert!(
+            (7.0..=11.0).contains(&cable.width_px),
+            "width {}",
+            cable.width_px
+        );
+    }
+    assert_eq!(seg.end_cables, vec![Some(0), Some(0)]);
+    let one = run(&Params {
+        twins: false,
+        ..Params::default()
+    });
+    assert_eq!(one.cables.len(), 1);
+}

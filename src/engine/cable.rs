@@ -187,7 +187,7 @@ fn fallback_width(vertices: &[u32], graph: &Graph, sp: &Superpixels) -> f32 {
 }
 
 /// Per-channel median sRGB colour of `image` along `line`.
-fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
+pub(super) fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
     let (w, h) = image.dimensions();
     let mut channels: [Vec<u8>; 3] = Default::default();
     for p in line {

@@ -34,6 +34,7 @@ mod scale;
 pub mod sharpness;
 pub mod spline;
 pub mod superpixels;
+mod twins;
 pub mod walk;
 
 use std::time::Instant;
@@ -291,6 +292,11 @@ pub fn segment_oversegmented(
             cables.push(cable);
         }
         timings.walks += ms(t);
+    }
+    if params.twins {
+        let t = Instant::now();
+        twins::split_twins(&mut cables, &mut end_cables, &lab, image, params);
+        timings.splines += ms(t);
     }
 
     Ok(Segmentation {

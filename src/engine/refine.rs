@@ -460,7 +460,7 @@ fn shadows_agree(readings: &[(usize, Reading)], normal: &[[f32; 2]]) -> bool {
 
 /// Offsets at every point: read ones median-filtered (5) and mean-filtered (5), the
 /// gaps filled by linear interpolation, all clamped to ±`limit`.
-fn smooth_offsets(read: &[(usize, f32)], n: usize, limit: f32) -> Vec<f32> {
+pub(super) fn smooth_offsets(read: &[(usize, f32)], n: usize, limit: f32) -> Vec<f32> {
     let vals: Vec<f32> = read.iter().map(|r| r.1).collect();
     let med: Vec<f32> = (0..vals.len())
         .map(|i| {

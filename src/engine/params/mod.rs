@@ -200,6 +200,17 @@ pub struct Params {
     /// ends), and is no cable of its own (1 accepts every walk).
     pub pair_max_shared: f32,
 
+    // --- twins (see `twins`) ---
+    /// Cables found as one over two of one colour side by side are split in two.
+    pub twins: bool,
+    /// Least share of the profiles read across a cable that must show twins for it
+    /// to be split.
+    pub twin_min_share: f32,
+    /// Largest mismatch of a profile's band with itself shifted by the twins'
+    /// separation, as a share of the band's own variation (Lab ΔE), for the profile to
+    /// show twins.
+    pub twin_max_cost: f32,
+
     // --- model details ---
     /// Fit weight of a given end relative to one superpixel centroid (ends are exact).
     pub end_weight: f32,
@@ -366,6 +377,9 @@ impl Default for Params {
             quality_contrast_exponent: 2.0,
             join_min_length: 0.5,
             pair_max_shared: 0.45,
+            twins: true,
+            twin_min_share: 0.6,
+            twin_max_cost: 0.5,
             end_weight: 25.0,
             far_end_trim: 0.5,
             border_exit_steps: 3.0,
@@ -453,6 +467,7 @@ impl Params {
             width_tolerance: 100.0,
             wide_field_ratio: 100.0,
             end_confirm_px: 0.0,
+            twins: false,
             ..Self::default()
         }
     }

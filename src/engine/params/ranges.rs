@@ -80,6 +80,8 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("quality_contrast_exponent", 0.0, 10.0),
     ("join_min_length", 0.0, 10.0),
     ("pair_max_shared", 0.0, 1.0),
+    ("twin_min_share", 0.0, 1.0),
+    ("twin_max_cost", 0.0, 10.0),
     ("end_weight", 0.01, 1e4),
     ("far_end_trim", 0.0, 10.0),
     ("border_exit_steps", 0.0, 100.0),

@@ -1,0 +1,411 @@
+//! Two cables of one colour lying side by side, found as one. A pair of wires laid
+//! together, or two cables run along each other, is one band to the network (one
+//! terminal peak per pair of ends, one cable in its field) and to the superpixels; the
+//! walk follows the band and the fit draws one centreline down its middle, on the gap
+//! between the two cables. Across the band the photo still shows two cables: two runs
+//! of one colour with a valley between them (their rims, or a sliver of background).
+//!
+//! Every few pixels along each cable a colour profile is read across it. The band is
+//! the run of samples standing out from the background at the profile's ends (short
+//! holes closed: a gap between the twins, a pale cable's core as light as the table).
+//! Two alike cables side by side make the band repeat itself: shifted by their
+//! separation, its first cable lies on the second. So the band is compared with itself
+//! shifted, by every separation from [`MIN_SEPARATION`] nominal widths up, against its
+//! own variation; the best shift is taken when it matches (`twin_max_cost`), the two
+//! cables it implies are each at least [`MIN_TWIN`] nominal widths wide, the gap
+//! between them no wider than [`MAX_GAP`] of a cable, and the valley between them
+//! unlike their cores ([`VALLEY`]). One cable, shaded or glossy, does not repeat
+//! itself at a shift of half its width (its rim would lie on its core), and a flat one
+//! has no valley. A cable whose profiles read as twins in at least `twin_min_share` of
+//! those that read at all is replaced by the two cables, each drawn through the twin
+//! centres read along it.
+
+use image::RgbImage;
+
+use super::Cable;
+use super::Params;
+use super::cable::median_rgb;
+use super::color::LabImage;
+use super::geometry::{dist, dist3, median, polyline_length};
+use super::refine::{normals, sample_lab, smooth_offsets};
+use super::spline::BSpline;
+
+/// Distance between the samples of a profile, pixels.
+const STEP: f32 = 0.5;
+/// Half-length of a profile, nominal widths: room for two cables beside a centreline
+/// on either of them.
+const REACH: f32 = 3.0;
+/// The background at either end of a profile: the mean of this many pixels.
+const END_PX: f32 = 3.0;
+/// Least contrast (Lab ΔE to the nearer profile end) of the profile's peak, within
+/// [`PEAK_REACH`] nominal widths of its centre, for the profile to be read.
+const MIN_PEAK_DE: f32 = 12.0;
+/// Reach of that peak from the centre, nominal widths.
+const PEAK_REACH: f32 = 1.5;
+/// A sample belongs to the band when its contrast exceeds this share of the peak...
+const BAND_SHARE: f32 = 0.3;
+/// ... and this ΔE.
+const MIN_BAND_DE: f32 = 6.0;
+/// Holes in the band up to this many nominal widths are closed.
+const HOLE: f32 = 0.6;
+/// Shortest separation of twins (centre to centre), nominal widths.
+const MIN_SEPARATION: f32 = 0.8;
+/// Longest separation tried, as a share of the band.
+const MAX_SEPARATION_SHARE: f32 = 0.65;
+/// Least width of each twin, nominal widths.
+const MIN_TWIN: f32 = 0.8;
+/// Widest gap between twins, as a share of a twin's width.
+const MAX_GAP: f32 = 0.6;
+/// The valley between twins differs from the mean of their cores by at least this
+/// share of the band's variation.
+const VALLEY: f32 = 0.4;
+/// A profile is read every this many pixels along the cable...
+const SPACING_PX: f32 = 4.0;
+/// ... but not within this many pixels of its ends (a terminal, the frame).
+const END_SKIP_PX: f32 = 10.0;
+/// Fewest profiles that must read for a cable to be judged.
+const MIN_READINGS: usize = 4;
+
+/// Twins read across one profile.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Twins {
+    /// The two cables' centres, pixels from the profile's centre along its direction.
+    offsets: [f32; 2],
+    /// Their width, pixels.
+    width: f32,
+}
+
+/// Replaces every cable that lies over twins (module docs) by the two, each right
+/// after the other in `cables` with the first's score, and renumbers the cables;
+/// `end_cables` (given end to cable) follows, the ends going to the twin nearer the
+/// cable found. A twin that runs along a cable found on its own, or along an earlier
+/// twin, is that cable (the walks found one or both twins as well) and is dropped.
+/// `lab` is `image` in Lab, as the cables were found on it.
+pub(super) fn split_twins(
+    cables: &mut Vec<Cable>,
+    end_cables: &mut [Option<usize>],
+    lab: &LabImage,
+    image: &RgbImage,
+    params: &Params,
+) {
+    // Every cable found, or its twins with the index of the cable they came from.
+    let mut candidates: Vec<(Cable, Option<usize>)> = Vec::with_capacity(cables.len());
+    let mut first = Vec::with_capacity(cables.len());
+    for (k, cable) in cables.drain(..).enumerate() {
+        first.push(candidates.len());
+        match twin_cables(&cable, lab, image, params) {
+            Some(pair) => candidates.extend(pair.map(|c| (c, Some(k)))),
+            None => candidates.push((cable, None)),
+        }
+    }
+    // For each candidate, the candidate it repeats (itself when it is kept).
+    let mut same: Vec<usize> = (0..candidates.len()).collect();
+    for i in 0..candidates.len() {
+        let (twin, Some(parent)) = &candidates[i] else {
+            continue;
+        };
+        let tolerance = 0.5 * twin.width_px.max(params.nominal_width_px);
+        let repeated = (0..candidates.len()).find(|&j| {
+            let (other, from) = &candidates[j];
+            let comparable = match from {
+                None => true,
+                Some(p) => p != parent && j < i && same[j] == j,
+            };
+            comparable && runs_along(&twin.polyline, &other.polyline, tolerance)
+        });
+        if let Some(j) = repeated {
+            same[i] = j;
+        }
+    }
+    let mut id = vec![0; candidates.len()];
+    let mut next = 0;
+    for i in 0..candidates.len() {
+        if same[i] == i {
+            id[i] = next;
+            next += 1;
+        }
+    }
+    for end in end_cables.iter_mut() {
+        *end = end.map(|old| id[same[first[old]]]);
+    }
+    *cables = candidates
+        .into_iter()
+        .enumerate()
+        .filter(|&(i, _)| same[i] == i)
+        .map(|(i, (mut cable, _))| {
+            cable.id = id[i];
+            cable
+        })
+        .collect();
+}
+
+/// Least share of a twin's centreline within the tolerance of another cable's for the
+/// twin to be that cable.
+const REPEAT_SHARE: f32 = 0.5;
+
+/// Whether at least [`REPEAT_SHARE`] of the points of `line` lie within `tolerance`
+/// of a point of `other` (both sampled densely).
+fn runs_along(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> bool {
+    let near = line
+        .iter()
+        .filter(|&&p| other.iter().any(|&q| dist(p, q) <= tolerance))
+        .count();
+    near as f32 >= REPEAT_SHARE * line.len() as f32
+}
+
+/// The two cables `cable` lies over, the one nearer it first and with its ends; `None`
+/// when its profiles do not read as twins.
+fn twin_cables(
+    cable: &Cable,
+    lab: &LabImage,
+    image: &RgbImage,
+    params: &Params,
+) -> Option<[Cable; 2]> {
+    let line = &cable.polyline;
+    let nominal = params.nominal_width_px;
+    let normal = normals(line);
+    let steps = (REACH * nominal / STEP).round() as i32;
+    let mut profile = Vec::with_capacity(2 * steps as usize + 1);
+    let (mut read, mut twins) = (0usize, Vec::new());
+    let length = polyline_length(line);
+    let mut along = 0.0;
+    let mut next = END_SKIP_PX;
+    for i in 0..line.len() {
+        if i > 0 {
+            along += dist(line[i - 1], line[i]);
+        }
+        if along < next || along > length - END_SKIP_PX {
+            continue;
+        }
+        next = along + SPACING_PX;
+        let (p, n) = (line[i], normal[i]);
+        profile.clear();
+        profile.extend((-steps..=steps).map_while(|j| {
+            sample_lab(
+                lab,
+                p[0] + j as f32 * STEP * n[0],
+                p[1] + j as f32 * STEP * n[1],
+            )
+        }));
+        if profile.len() != 2 * steps as usize + 1 {
+            continue;
+        }
+        if let Some(reading) = read_twins(&profile, nominal, params.twin_max_cost) {
+            read += 1;
+            twins.extend(reading.map(|t| (i, t)));
+        }
+    }
+    if read < MIN_READINGS || (twins.len() as f32) < params.twin_min_share * read as f32 {
+        return None;
+    }
+    let limit = REACH * nominal;
+    let side = |k: usize| {
+        let offsets: Vec<(usize, f32)> = twins.iter().map(|&(i, t)| (i, t.offsets[k])).collect();
+        smooth_offsets(&offsets, line.len(), limit)
+    };
+    let mut widths: Vec<f32> = twins.iter().map(|t| t.1.width).collect();
+    let width = median(&mut widths, f32::total_cmp)?;
+    let mut sides = [side(0), side(1)];
+    let mean_abs = |s: &[f32]| s.iter().map(|v| v.abs()).sum::<f32>() / s.len() as f32;
+    if mean_abs(&sides[1]) < mean_abs(&sides[0]) {
+        sides.swap(0, 1);
+    }
+    let [near, far] = sides.map(|offsets| {
+        let points: Vec<[f32; 2]> = line
+            .iter()
+            .zip(&normal)
+            .zip(&offsets)
+            .map(|((p, n), &d)| [p[0] + d * n[0], p[1] + d * n[1]])
+            .collect();
+        beside(cable, &points, width, image, params)
+    });
+    let mut far = far?;
+    far.end_indices = [None, None];
+    Some([near?, far])
+}
+
+/// A cable like `cable` along `points`, `width` wide, its colour read on `image`.
+fn beside(
+    cable: &Cable,
+    points: &[[f32; 2]],
+    width: f32,
+    image: &RgbImage,
+    params: &Params,
+) -> Option<Cable> {
+    let weights = vec![1.0; points.len()];
+    let spline = BSpline::fit(points, &weights, params.knot_spacing_px, params.smoothing)?;
+    let polyline = spline.sample(params.polyline_step_px);
+    Some(Cable {
+        ends: [polyline[0], polyline[polyline.len() - 1]],
+        length_px: polyline_length(&polyline),
+        width_px: width,
+        color: median_rgb(image, &polyline),
+        spline,
+        polyline,
+        ..cable.clone()
+    })
+}
+
+/// Reads one profile (Lab samples [`STEP`] apart, centred on the cable found):
+/// `None` when it shows nothing to read, `Some(None)` one cable, `Some(Some(_))` twins
+/// (module docs).
+fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Option<Twins>> {
+    let n = profile.len();
+    let centre = n / 2;
+    let samples = |widths: f32| (widths * nominal / STEP).round() as usize;
+    let end = ((END_PX / STEP) as usize).clamp(1, n / 4);
+    let mean = |s: &[[f32; 3]]| {
+        let k = s.len() as f32;
+        [0, 1, 2].map(|c| s.iter().map(|v| v[c]).sum::<f32>() / k)
+    };
+    let (left, right) = (mean(&profile[..end]), mean(&profile[n - end..]));
+    let fg: Vec<f32> = profile
+        .iter()
+        .map(|&s| dist3(s, left).min(dist3(s, right)))
+        .collect();
+    let reach = samples(PEAK_REACH).min(centre);
+    let peak = fg[centre - reach..=centre + reach]
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max);
+    if peak < MIN_PEAK_DE {
+        return None;
+    }
+    let level = MIN_BAND_DE.max(BAND_SHARE * peak);
+    let on = |i: usize| fg[i] > level;
+    let start = (0..=samples(1.0).min(centre))
+        .flat_map(|d| [centre - d, centre + d])
+        .find(|&i| on(i))?;
+    let hole = samples(HOLE);
+    let grow = |indices: &mut dyn Iterator<Item = usize>| {
+        let (mut last, mut gap) = (start, 0);
+        for i in indices {
+            if on(i) {
+                (last, gap) = (i, 0);
+            } else {
+                gap += 1;
+                if gap > hole {
+                    break;
+                }
+            }
+        }
+        last
+    };
+    let lo = grow(&mut (0..start).rev());
+    let hi = grow(&mut (start + 1..n));
+    if lo < end || hi + end >= n {
+        return None;
+    }
+    let band = &profile[lo..=hi];
+    let band_mean = mean(band);
+    let variation = band.iter().map(|&s| dist3(s, band_mean)).sum::<f32>() / band.len() as f32;
+    if variation <= f32::EPSILON {
+        return Some(None);
+    }
+    let shifts =
+        samples(MIN_SEPARATION).max(1)..=(MAX_SEPARATION_SHARE * band.len() as f32) as usize;
+    let cost = |shift: usize| {
+        let k = band.len() - shift;
+        (0..k).map(|t| dist3(band[t], band[t + shift])).sum::<f32>() / (k as f32 * variation)
+    };
+    let Some((cost, shift)) = shifts
+        .map(|s| (cost(s), s))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+    else {
+        return Some(None);
+    };
+    let separation = shift as f32 * STEP;
+    let width = band.len() as f32 * STEP - separation;
+    let gap = separation - width;
+    if cost > max_cost || width < MIN_TWIN * nominal || gap > MAX_GAP * width {
+        return Some(None);
+    }
+    let w = (width / STEP).round() as usize;
+    let core = mean(&[band[w / 2], band[band.len() - 1 - w / 2]]);
+    let (a, b) = (
+        w.saturating_sub(2),
+        (band.len() - 1).saturating_sub(w).saturating_add(2),
+    );
+    let (a, b) = (a.min(b).max(1), a.max(b).min(band.len() - 2));
+    let valley = band[a..=b]
+        .iter()
+        .map(|&s| dist3(s, core))
+        .fold(0.0f32, f32::max);
+    if valley < VALLEY * variation {
+        return Some(None);
+    }
+    let offset = |i: f32| (lo as f32 + i - centre as f32) * STEP;
+    Some(Some(Twins {
+        offsets: [
+            offset(w as f32 / 2.0),
+            offset((band.len() - 1) as f32 - w as f32 / 2.0),
+        ],
+        width,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A profile across `cables` (centre, width, Lab core, Lab rim) on a background,
+    /// [`STEP`] apart, `reach` pixels either side of 0.
+    fn profile(
+        cables: &[(f32, f32, [f32; 3], [f32; 3])],
+        background: [f32; 3],
+        reach: f32,
+    ) -> Vec<[f32; 3]> {
+        let steps = (reach / STEP).round() as i32;
+        (-steps..=steps)
+            .map(|j| {
+                let x = j as f32 * STEP;
+                cables
+                    .iter()
+                    .find(|c| (x - c.0).abs() <= c.1 / 2.0)
+                    .map_or(background, |c| {
+                        if (x - c.0).abs() > c.1 / 2.0 - 1.5 {
+                            c.3
+                        } else {
+                            c.2
+                        }
+                    })
+            })
+            .collect()
+    }
+
+    const RED: [f32; 3] = [45.0, 60.0, 40.0];
+    const DARK_RED: [f32; 3] = [28.0, 45.0, 30.0];
+    const TABLE: [f32; 3] = [88.0, 0.0, 2.0];
+    const INK: [f32; 3] = [12.0, 0.0, -1.0];
+
+    #[test]
+    fn two_touching_cables_read_as_twins_and_one_cable_does_not() {
+        let reach = REACH * 7.8;
+        let pair = profile(
+            &[(-4.0, 8.0, RED, DARK_RED), (4.0, 8.0, RED, DARK_RED)],
+            TABLE,
+            reach,
+        );
+        let t = read_twins(&pair, 7.8, 0.5).unwrap().expect("twins");
+        assert!(
+            (t.offsets[0] + 4.0).abs() <= 1.0 && (t.offsets[1] - 4.0).abs() <= 1.0,
+            "{t:?}"
+        );
+        assert!((t.width - 8.0).abs() <= 1.5, "{t:?}");
+        let one = profile(&[(0.0, 10.0, RED, DARK_RED)], TABLE, reach);
+        assert_eq!(read_twins(&one, 7.8, 0.5), Some(None));
+        let wide = profile(&[(0.0, 16.0, RED, DARK_RED)], TABLE, reach);
+        assert_eq!(read_twins(&wide, 7.8, 0.5), Some(None));
+        // A dark glossy cable 11 px wide, its highlight as light as the table. (Drawn,
+        // blurred and noisy, the synthetic `DarkOnDark` case reads as twins 5.5 px
+        // wide but for `MIN_TWIN`: `tests/e2e.rs` finds it as one cable.)
+        let glossy = profile(
+            &[(0.0, 3.0, TABLE, TABLE), (0.0, 11.0, INK, INK)],
+            TABLE,
+            reach,
+        );
+        assert_eq!(read_twins(&glossy, 7.8, 0.5), Some(None));
+        let plain = profile(&[], TABLE, reach);
+        assert_eq!(read_twins(&plain, 7.8, 0.5), None);
+    }
+}
