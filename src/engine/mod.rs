@@ -7,6 +7,7 @@
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
+//! [`twins`] splits a cable found over two of one colour laid together,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
