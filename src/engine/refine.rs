@@ -70,6 +70,24 @@ pub fn median_colour(lab: &LabImage, line: &[[f32; 2]]) -> Option<[f32; 3]> {
     Some(out)
 }
 
+/// Reads into `profile` the Lab samples across a curve at `p` along its unit normal
+/// `n`: `steps` samples `step` pixels apart on either side of `p`, and `p`'s own; false
+/// when the profile leaves the image (it is then cut short).
+pub(super) fn read_across(
+    lab: &LabImage,
+    p: [f32; 2],
+    n: [f32; 2],
+    (steps, step): (i32, f32),
+    profile: &mut Vec<[f32; 3]>,
+) -> bool {
+    profile.clear();
+    profile.extend((-steps..=steps).map_while(|j| {
+        let o = j as f32 * step;
+        sample_lab(lab, p[0] + o * n[0], p[1] + o * n[1])
+    }));
+    profile.len() == 2 * steps as usize + 1
+}
+
 /// Unit normals of a polyline (central differences).
 pub fn normals(line: &[[f32; 2]]) -> Vec<[f32; 2]> {
     let n = line.len();
@@ -114,16 +132,13 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     let mut readings: Vec<(usize, Reading)> = Vec::new();
     let (mut shown, mut steps_seen) = (0usize, 0usize);
     for i in (0..line.len()).step_by(params.refine_profile_stride.max(1) as usize) {
-        let (p, nrm) = (line[i], normal[i]);
-        profile.clear();
-        for j in -steps..=steps {
-            let o = j as f32 * settings.step;
-            match sample_lab(lab, p[0] + o * nrm[0], p[1] + o * nrm[1]) {
-                Some(s) => profile.push(s),
-                None => break,
-            }
-        }
-        if profile.len() != 2 * steps as usize + 1 {
+        if !read_across(
+            lab,
+            line[i],
+            normal[i],
+            (steps, settings.step),
+            &mut profile,
+        ) {
             continue;
         }
         let contrast = Contrast::of(&profile, steps as usize);

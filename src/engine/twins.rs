@@ -27,7 +27,7 @@ use super::Params;
 use super::cable::median_rgb;
 use super::color::LabImage;
 use super::geometry::{dist, dist3, median, polyline_length};
-use super::refine::{normals, sample_lab, smooth_offsets};
+use super::refine::{normals, read_across, smooth_offsets};
 use super::spline::BSpline;
 
 /// Distance between the samples of a profile, pixels.
@@ -178,16 +178,7 @@ fn twin_cables(
             continue;
         }
         next = along + SPACING_PX;
-        let (p, n) = (line[i], normal[i]);
-        profile.clear();
-        profile.extend((-steps..=steps).map_while(|j| {
-            sample_lab(
-                lab,
-                p[0] + j as f32 * STEP * n[0],
-                p[1] + j as f32 * STEP * n[1],
-            )
-        }));
-        if profile.len() != 2 * steps as usize + 1 {
+        if !read_across(lab, line[i], normal[i], (steps, STEP), &mut profile) {
             continue;
         }
         if let Some(reading) = read_twins(&profile, nominal, params.twin_max_cost) {
