@@ -277,6 +277,12 @@ pub struct Params {
     /// A candidate whose mean cable probability is at least this is accepted even when
     /// its lateral contrast is low (a dark cable on a dark background).
     pub field_trust: f32,
+    /// A walk that, within this many superpixel steps of its seed, finds nothing ahead
+    /// of its colour while the field is sure (`field_trust`) it stands on a cable (a
+    /// ferrule's collar, a sleeve or a label between the end and the cable) steps once,
+    /// by the field alone, onto a vertex the field is sure of and whose direction the
+    /// step follows, and takes that vertex's colour as the cable's. 0: never.
+    pub field_recolour_steps: f32,
     /// A walk that comes within `close_radius_px` of another end closes on it only when
     /// its heading agrees with the field's direction at that end at least this much
     /// ([`crate::engine::field::alignment`]: 1 along, 0 across, 1/2 where the field has
@@ -403,6 +409,7 @@ impl Default for Params {
             field_min_cable: 0.0,
             field_gap_min_cable: 0.02,
             field_trust: 0.6,
+            field_recolour_steps: 2.0,
             field_close_min_alignment: 0.25,
             field_through_factor: 0.5,
             quality_field_exponent: 1.0,

@@ -103,6 +103,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_min_cable", 0.0, 1.0),
     ("field_gap_min_cable", 0.0, 1.0),
     ("field_trust", 0.0, 1.0),
+    ("field_recolour_steps", 0.0, 100.0),
     ("field_close_min_alignment", 0.0, 1.0),
     ("field_through_factor", 0.0, 1.0),
     ("quality_field_exponent", 0.0, 10.0),

@@ -33,7 +33,11 @@
 //! field's cable probability is below `field_gap_min_cable` (a step may skip
 //! superpixels — a crossing, a terminal's metal — but not cross the background from one
 //! cable to another), or when its contrast is below `min_contrast` unless the field is
-//! sure (p ≥ `field_trust`) that it is a cable.
+//! sure (p ≥ `field_trust`) that it is a cable. Within `field_recolour_steps` of its
+//! seed, a walk refused on colour alone where the field is sure it stands on a cable
+//! (a ferrule's collar or a sleeve between the end and the cable's insulation) steps
+//! once by the field alone: onto the best vertex the field is sure of, the step along
+//! the field's direction at both, whose colour becomes the walk's model.
 //!
 //! A walk ends on reaching another seed (within r, and within
 //! `close_max_lateral_steps` superpixel steps of the walk's line, so a walk passing the
@@ -171,6 +175,11 @@ const OPENING_VERTICES: usize = 3;
 /// Least agreement of the field's direction behind a seed with a walk's opening
 /// direction for the cable to run on there (0.8: within about 26°).
 const THROUGH_MIN_ALIGNMENT: f32 = 0.8;
+/// Least agreement of a step taken by the field alone (`field_recolour_steps`) with
+/// the field's direction where it starts and where it lands (0.8: within about 26°): a
+/// cable that changes colour runs on the same way; the tip of an end pushed against
+/// another cable meets that cable at an angle.
+const RECOLOUR_MIN_ALIGNMENT: f32 = 0.8;
 /// Largest Lab distance from the walk's opening colour for the photo behind a seed to
 /// be the same cable.
 const THROUGH_MAX_LAB: f32 = 20.0;
@@ -283,6 +292,7 @@ impl<'a> Walker<'a> {
         let mut contrast_sum = self.contrast(first, heading(&points, p.heading_span_px));
         let mut cable_sum = self.vertex_field(first).map_or(1.0, |f| f.cable);
         let mut end = self.classify(s, &points, length);
+        let mut recoloured = false;
 
         while end.is_none() && (steps as usize) < p.max_steps as usize {
             let head = *vertices.last().unwrap_or(&first);
@@ -290,16 +300,21 @@ impl<'a> Walker<'a> {
             let here = *points.last().unwrap_or(&seed.point);
             // A walk that finds nothing acceptable nearby looks further once before it
             // gives up: crossings and terminals can hide the cable for a few superpixels.
+            let jump = p.jump_order.max(p.neighbourhood_order);
+            let mut reseed = false;
             let found = self
-                .best_candidate(id, head, here, dir, p.neighbourhood_order)
+                .best_candidate(id, head, here, dir, p.neighbourhood_order, false)
+                .or_else(|| self.best_candidate(id, head, here, dir, jump, false))
                 .or_else(|| {
-                    self.best_candidate(
-                        id,
-                        head,
-                        here,
-                        dir,
-                        p.jump_order.max(p.neighbourhood_order),
-                    )
+                    reseed = !recoloured
+                        && dist(here, seed.point) <= p.field_recolour_steps * self.side_px
+                        && self
+                            .vertex_field(head)
+                            .is_some_and(|f| f.cable >= p.field_trust);
+                    reseed
+                        .then(|| self.best_candidate(id, head, here, dir, jump, true))
+                        .flatten()
+                        .filter(|c| self.continues_along(head, here, c.vertex))
                 });
             let Some(Candidate {
                 vertex: c,
@@ -317,13 +332,20 @@ impl<'a> Walker<'a> {
             length += dist(here, q);
             vertices.push(c);
             points.push(q);
-            log_visual += (1.0 / (1.0 + p.c_visual * (1.0 - sim))).ln();
             log_curve += pc.ln();
             steps += 1;
-            let rate = p.model_rate;
             let hist = self.graph.histogram(c);
-            for (m, h) in self.model.iter_mut().zip(hist) {
-                *m = (1.0 - rate) * *m + rate * h;
+            if reseed {
+                // A new colour on the same cable: it is the cable's from here on, and
+                // the change itself says nothing about the walk.
+                recoloured = true;
+                self.model.copy_from_slice(hist);
+            } else {
+                log_visual += (1.0 / (1.0 + p.c_visual * (1.0 - sim))).ln();
+                let rate = p.model_rate;
+                for (m, h) in self.model.iter_mut().zip(hist) {
+                    *m = (1.0 - rate) * *m + rate * h;
+                }
             }
             contrast_sum += contrast;
             cable_sum += cable;
@@ -402,6 +424,18 @@ impl<'a> Walker<'a> {
             })
             .count();
         2 * on > samples + 1
+    }
+
+    /// Whether the step from `here` (on vertex `head`) to vertex `to` runs along the
+    /// field's direction at both.
+    fn continues_along(&self, head: u32, here: [f32; 2], to: u32) -> bool {
+        let q = self.pos(to);
+        let d = dist(here, q);
+        let u = [(q[0] - here[0]) / d, (q[1] - here[1]) / d];
+        [head, to].iter().all(|&v| {
+            self.vertex_field(v)
+                .is_some_and(|f| alignment(u, f.orientation) >= RECOLOUR_MIN_ALIGNMENT)
+        })
     }
 
     /// Where a ray from `from` along `dir` comes within `EXIT_INSET_PX` of the frame.
@@ -496,13 +530,13 @@ mod tests {
     use super::*;
     use crate::engine::superpixels::Superpixels;
 
-    /// The walks from `seeds` on a 200x60 grey photo cut into 20 px superpixels (ids
-    /// 0-9 the top row, 10-19 the middle row, 20-29 the bottom row) with a dark line
-    /// along the middle row over the columns `dark` (pixels), where the field shows
-    /// horizontal cable on the 10 px cells of the middle row for which `cable` holds
-    /// (given the cell's column), under `params`.
+    /// The walks from `seeds` on a 200x60 grey photo (level 160) cut into 20 px
+    /// superpixels (ids 0-9 the top row, 10-19 the middle row, 20-29 the bottom row)
+    /// whose middle row has the grey level `line` gives for each column (pixels), where
+    /// the field shows horizontal cable on the 10 px cells of the middle row for which
+    /// `cable` holds (given the cell's column), under `params`.
     fn walks_on_a_line(
-        dark: std::ops::Range<usize>,
+        line: impl Fn(usize) -> u8,
         cable: impl Fn(usize) -> bool,
         seeds: &[Seed],
         params: &Params,
@@ -520,8 +554,8 @@ mod tests {
         };
         let rgb: Vec<u8> = (0..w * h)
             .flat_map(|p| {
-                let on = (20..40).contains(&(p / w)) && dark.contains(&(p % w));
-                [if on { 40 } else { 160 }; 3]
+                let middle = (20..40).contains(&(p / w));
+                [if middle { line(p % w) } else { 160 }; 3]
             })
             .collect();
         let lab = LabImage::from_rgb(&rgb, w, h);
@@ -548,6 +582,11 @@ mod tests {
         walk_all(terrain, seeds, true).unwrap()
     }
 
+    /// A dark line (level 40) from the left edge to column `end`.
+    fn dark_to(end: usize) -> impl Fn(usize) -> u8 {
+        move |x| if x < end { 40 } else { 160 }
+    }
+
     /// The walks from the end of a cable on a dark line along the whole middle row,
     /// where the field shows cable on the line's first three and last three superpixels
     /// only (a painted line or a shadow joins two cables), under `params`: the vertices
@@ -558,7 +597,7 @@ mod tests {
             point: [58.0, 30.0],
             vertex: 12,
         }];
-        walks_on_a_line(0..200, |col| !(6..14).contains(&col), &seeds, params)
+        walks_on_a_line(|_| 40, |col| !(6..14).contains(&col), &seeds, params)
             .into_iter()
             .map(|w| w.vertices)
             .collect()
@@ -573,7 +612,7 @@ mod tests {
             point: [118.0, 30.0],
             vertex: 15,
         };
-        let walks = walks_on_a_line(0..120, cable, &[end], &p);
+        let walks = walks_on_a_line(dark_to(120), cable, &[end], &p);
         let along = walks.iter().find(|w| w.end == WalkEnd::Border);
         assert!(along.is_some_and(|w| !w.through), "{walks:?}");
         // From a point in its middle the cable runs on behind every walk along it.
@@ -581,13 +620,39 @@ mod tests {
             point: [70.0, 30.0],
             vertex: 13,
         };
-        let walks = walks_on_a_line(0..120, cable, &[middle], &p);
+        let walks = walks_on_a_line(dark_to(120), cable, &[middle], &p);
         let on_it: Vec<&Walk> = walks
             .iter()
             .filter(|w| w.vertices.iter().all(|v| (10..20).contains(v)))
             .collect();
         assert_eq!(on_it.len(), 2, "{walks:?}");
         assert!(on_it.iter().all(|w| w.through), "{walks:?}");
+    }
+
+    #[test]
+    fn a_walk_passes_a_collar_of_another_colour_between_its_end_and_the_cable() {
+        // A dark cable from the left edge to x = 80, then a white collar to its end at
+        // x = 120 (superpixels 14 and 15); the field sees cable all along.
+        let collared = |x: usize| match x {
+            0..80 => 40,
+            80..120 => 230,
+            _ => 160,
+        };
+        let end = Seed {
+            point: [118.0, 30.0],
+            vertex: 15,
+        };
+        let along = |params: &Params| {
+            walks_on_a_line(collared, |col| col < 12, &[end], params)
+                .iter()
+                .any(|w| w.end == WalkEnd::Border && w.vertices.contains(&10))
+        };
+        assert!(along(&Params::default()));
+        let never = Params {
+            field_recolour_steps: 0.0,
+            ..Params::default()
+        };
+        assert!(!along(&never), "the collar this rule passes");
     }
 
     #[test]

@@ -8,7 +8,9 @@ use crate::engine::graph::intersection;
 use crate::engine::spline::resample;
 
 impl Walker<'_> {
-    /// The best acceptable next vertex among those within `order` hops of `head`.
+    /// The best acceptable next vertex among those within `order` hops of `head`;
+    /// `colour_blind`: among those the field is sure of (`field_trust`), whatever their
+    /// colour (a step by the field alone, module docs).
     pub(super) fn best_candidate(
         &mut self,
         id: u32,
@@ -16,6 +18,7 @@ impl Walker<'_> {
         here: [f32; 2],
         dir: [f32; 2],
         order: u32,
+        colour_blind: bool,
     ) -> Option<Candidate> {
         let p = self.params;
         self.hood
@@ -36,7 +39,11 @@ impl Walker<'_> {
                 continue;
             }
             let similarity = intersection(&self.model, self.graph.histogram(c));
-            let pv = 1.0 / (1.0 + p.c_visual * (1.0 - similarity));
+            let pv = if colour_blind {
+                1.0
+            } else {
+                1.0 / (1.0 + p.c_visual * (1.0 - similarity))
+            };
             let curvature = (p.kappa * (cos - 1.0)).exp();
             let pd = 1.0 / (1.0 + p.c_distance * d / p.max_step_px);
             let unit = [step[0] / d, step[1] / d];
@@ -50,6 +57,9 @@ impl Walker<'_> {
                 }
                 None => (1.0, 1.0),
             };
+            if colour_blind && cable < p.field_trust {
+                continue;
+            }
             let score = pv * curvature * pd * contrast * field_term;
             if best.as_ref().is_none_or(|b| score > b.0) {
                 best = Some((
@@ -67,7 +77,7 @@ impl Walker<'_> {
         let field = self.field.is_some();
         best.map(|b| b.1).filter(|b| {
             let sure = field && b.cable >= p.field_trust;
-            b.similarity >= p.min_similarity
+            (b.similarity >= p.min_similarity || colour_blind)
                 && (!field || b.cable >= p.field_min_cable)
                 && (b.contrast >= p.min_contrast || sure)
                 && !self.crosses_background(here, self.pos(b.vertex))
