@@ -263,11 +263,14 @@ pub enum Case {
     /// Two cables of the same colour laid together, a sliver of background (1 px)
     /// between them: one band to the network and to the superpixels.
     Twins,
+    /// Two cables of one colour laid together across the whole frame, light on a dark
+    /// background: no end in view, one band to the network and the superpixels.
+    TwinsNoEndInView,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 9] = [
+    pub const ALL: [Case; 10] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -277,13 +280,14 @@ impl Case {
         Case::TerminalAgainstCable,
         Case::Crossing,
         Case::Twins,
+        Case::TwinsNoEndInView,
     ];
 
     /// Width of the case's cables, pixels.
     fn cable_width(self) -> f32 {
         match self {
             Case::SideBySideThin => 8.0,
-            Case::Twins => 9.0,
+            Case::Twins | Case::TwinsNoEndInView => 9.0,
             _ => 11.0,
         }
     }
@@ -291,6 +295,19 @@ impl Case {
 
 /// A cable to draw: centreline and colour.
 type Drawn = (Vec<[f32; 2]>, [u8; 3]);
+
+/// The line `gap` pixels beside `line`, along its normals (to the right of its
+/// direction in image coordinates).
+fn alongside(line: &[[f32; 2]], gap: f32) -> Vec<[f32; 2]> {
+    (0..line.len())
+        .map(|i| {
+            let (p, q) = (line[i.saturating_sub(1)], line[(i + 1).min(line.len() - 1)]);
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            let k = gap / dx.hypot(dy);
+            [line[i][0] - dy * k, line[i][1] + dx * k]
+        })
+        .collect()
+}
 
 /// A [`Case`] scene: shaded cables (a darker rim, a lighter core) with crimped metal
 /// terminals beyond every end inside the frame, on a noisy plain background.
@@ -325,19 +342,17 @@ pub fn case(case: Case) -> Scene {
         }
         Case::Twins => {
             let a = line(&arc(110.0, 140.0, 540.0, 330.0, 0.15), 600);
-            // Beside `a` along its normals, one width and a pixel away.
-            let b = (0..a.len())
-                .map(|i| {
-                    let (p, q) = (a[i.saturating_sub(1)], a[(i + 1).min(a.len() - 1)]);
-                    let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-                    let k = (width + 1.0) / dx.hypot(dy);
-                    [a[i][0] - dy * k, a[i][1] + dx * k]
-                })
-                .collect();
+            let b = alongside(&a, width + 1.0);
             (
                 [226, 224, 218],
                 vec![(a, [40, 90, 200]), (b, [40, 90, 200])],
             )
+        }
+        Case::TwinsNoEndInView => {
+            // From beyond the left edge to beyond the right one.
+            let a = line(&arc(-30.0, 110.0, 670.0, 320.0, 0.12), 800);
+            let b = alongside(&a, width);
+            ([40, 38, 36], vec![(a, [215, 190, 40]), (b, [215, 190, 40])])
         }
         Case::NoEndInView => (
             [222, 226, 230],

@@ -16,6 +16,7 @@ use super::graph::Graph;
 use super::orphans::orphan_seeds;
 use super::pairing::{self, Pairing};
 use super::superpixels::Superpixels;
+use super::twins::lies_over_twins;
 use super::walk::{self, Seed, Walk, WalkEnd};
 use super::{EngineError, Params};
 
@@ -174,7 +175,9 @@ fn cables_from(
     };
     let cables = modelled
         .into_iter()
-        .filter(|c| c.ridge_share >= p.min_ridge_share)
+        .filter(|c| {
+            c.ridge_share >= p.min_ridge_share || lies_over_twins(c, terrain.lab, scene.image, p)
+        })
         .filter(|c| !along_one_side(&c.polyline, sp.width, sp.height, p.border_margin_px))
         .map(|mut cable| {
             cable.end_indices = [None, None];

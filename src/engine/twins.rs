@@ -153,6 +153,17 @@ fn runs_along(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> bool {
     near as f32 >= REPEAT_SHARE * line.len() as f32
 }
 
+/// Whether `cable` lies over twins ([`split_twins`] would split it): across such a pair
+/// the refinement reads the crease between them, not a ridge.
+pub(super) fn lies_over_twins(
+    cable: &Cable,
+    lab: &LabImage,
+    image: &RgbImage,
+    params: &Params,
+) -> bool {
+    params.twins && twin_cables(cable, lab, image, params).is_some()
+}
+
 /// The two cables `cable` lies over, the one nearer it first and with its ends; `None`
 /// when its profiles do not read as twins.
 fn twin_cables(
