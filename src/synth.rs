@@ -296,14 +296,14 @@ impl Case {
 /// A cable to draw: centreline and colour.
 type Drawn = (Vec<[f32; 2]>, [u8; 3]);
 
-/// The line `gap` pixels beside `line`, along its normals (to the right of its
-/// direction in image coordinates).
-fn alongside(line: &[[f32; 2]], gap: f32) -> Vec<[f32; 2]> {
+/// The line `offset` pixels beside `line` (centre to centre), along its normals: to
+/// the right of its direction, y pointing down.
+fn alongside(line: &[[f32; 2]], offset: f32) -> Vec<[f32; 2]> {
     (0..line.len())
         .map(|i| {
             let (p, q) = (line[i.saturating_sub(1)], line[(i + 1).min(line.len() - 1)]);
             let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-            let k = gap / dx.hypot(dy);
+            let k = offset / dx.hypot(dy);
             [line[i][0] - dy * k, line[i][1] + dx * k]
         })
         .collect()
