@@ -301,21 +301,22 @@ impl<'a> Walker<'a> {
             // A walk that finds nothing acceptable nearby looks further once before it
             // gives up: crossings and terminals can hide the cable for a few superpixels.
             let jump = p.jump_order.max(p.neighbourhood_order);
-            let mut reseed = false;
-            let found = self
+            let mut found = self
                 .best_candidate(id, head, here, dir, p.neighbourhood_order, false)
-                .or_else(|| self.best_candidate(id, head, here, dir, jump, false))
-                .or_else(|| {
-                    reseed = !recoloured
-                        && dist(here, seed.point) <= p.field_recolour_steps * self.side_px
-                        && self
-                            .vertex_field(head)
-                            .is_some_and(|f| f.cable >= p.field_trust);
-                    reseed
-                        .then(|| self.best_candidate(id, head, here, dir, jump, true))
-                        .flatten()
-                        .filter(|c| self.continues_along(head, here, c.vertex))
-                });
+                .or_else(|| self.best_candidate(id, head, here, dir, jump, false));
+            // Near its end, on a cable the field is sure of, a change of colour (a
+            // collar) is stepped over once by the field alone.
+            let reseed = found.is_none()
+                && !recoloured
+                && dist(here, seed.point) <= p.field_recolour_steps * self.side_px
+                && self
+                    .vertex_field(head)
+                    .is_some_and(|f| f.cable >= p.field_trust);
+            if reseed {
+                found = self
+                    .best_candidate(id, head, here, dir, jump, true)
+                    .filter(|c| self.continues_along(head, here, c.vertex));
+            }
             let Some(Candidate {
                 vertex: c,
                 similarity: sim,
