@@ -23,7 +23,7 @@ from pathlib import Path
 import torch
 
 from backbone import LiteFieldNet
-from train_field import CHANNELS
+from train_field import CHANNELS, export_onnx
 
 
 class FlipAveraged(torch.nn.Module):
@@ -57,11 +57,7 @@ def main():
     net = LiteFieldNet(CHANNELS, trained["width"])
     net.load_state_dict(torch.load(weights))
     model = FlipAveraged(net.eval(), args.heat).eval()
-    torch.onnx.export(model, torch.zeros(1, 3, 240, 320), args.out, input_names=["image"],
-                      output_names=["field"],
-                      dynamic_axes={"image": {2: "height", 3: "width"},
-                                    "field": {2: "grid_height", 3: "grid_width"}},
-                      opset_version=17, dynamo=False)
+    export_onnx(model, Path(args.out))
     print(f"wrote {args.out}")
 
 

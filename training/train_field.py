@@ -235,6 +235,16 @@ def evaluate(model, photos):
     }
 
 
+def export_onnx(model: nn.Module, out: Path):
+    """Writes `model` as the engine reads it: input `image` [1, 3, H, W], output `field`
+    [1, 6, H/4, W/4], any photo size."""
+    torch.onnx.export(model, torch.zeros(1, 3, 240, 320), str(out), input_names=["image"],
+                      output_names=["field"],
+                      dynamic_axes={"image": {2: "height", 3: "width"},
+                                    "field": {2: "grid_height", 3: "grid_width"}},
+                      opset_version=17, dynamo=False)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=2000)
@@ -330,11 +340,7 @@ def main():
               "train_seconds": round(time.time() - start)}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    dummy = torch.zeros(1, 3, 240, 320)
-    torch.onnx.export(model, dummy, str(out), input_names=["image"], output_names=["field"],
-                      dynamic_axes={"image": {2: "height", 3: "width"},
-                                    "field": {2: "grid_height", 3: "grid_width"}},
-                      opset_version=17, dynamo=False)
+    export_onnx(model, out)
     torch.save(model.state_dict(), out.with_suffix(".pt"))
     out.with_suffix(".train.json").write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps({"train": report["train"], "held_out": report["held_out"]}), flush=True)
