@@ -143,14 +143,19 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         (pass, frame) = again(&pass, k, false)?;
     }
     // Masks as wide as the cables read. Wide cables read sub-linearly, so shrunk
-    // photos' cables can still read wider than nominal: their masks follow, never
-    // narrower; thin ones enlarged keep `mask_width_px` (README, "Any camera").
-    let s = pass.segmentation.mask_correction(&frame, job.params);
-    pass.segmentation.mask_scale = match k {
-        k if k < 1.0 => s.max(1.0),
-        k if k > 1.0 => 1.0,
-        _ => s,
+    // photos' cables still read wider than nominal: their masks follow whatever is left,
+    // never narrower; thin ones enlarged keep `mask_width_px`; at the first pass's
+    // scale masks follow only a width off by more than `mask_width_tolerance` (README,
+    // "Any camera").
+    let (params, found) = (job.params, &pass.segmentation);
+    let mask_scale = if k < 1.0 {
+        found.mask_correction(&frame, params, 1.0).max(1.0)
+    } else if k > 1.0 {
+        1.0
+    } else {
+        found.mask_correction(&frame, params, params.mask_width_tolerance)
     };
+    pass.segmentation.mask_scale = mask_scale;
     let Pass {
         segmentation,
         ends,

@@ -237,13 +237,15 @@ impl Segmentation {
 
     /// The factor to draw these cables' masks wider by (found at `frame`, not to be
     /// segmented again): their width ([`measured_width`]) over nominal when that is
-    /// off by more than [`Params::mask_width_tolerance`] (bounded to 0.5..=4, as the
-    /// second pass's scale), else 1. A camera a little
-    /// closer than the development photos' (cables up to `width_tolerance` times
-    /// nominal) asks for no second pass, but its cables are wider all the same.
-    pub fn mask_correction(&self, frame: &WorkingFrame, params: &Params) -> f32 {
+    /// off by more than `tolerance` (bounded to 0.5..=4, as the second pass's scale),
+    /// else 1. With [`Params::mask_width_tolerance`], a camera a little closer than the
+    /// development photos' (cables up to `width_tolerance` times nominal) asks for no
+    /// second pass, but its cables are wider all the same; after a second pass that
+    /// shrank the photo, the pipeline passes 1: the cables' width is known to be off
+    /// nominal, and what is left of it is the sub-linear reading of wide cables.
+    pub fn mask_correction(&self, frame: &WorkingFrame, params: &Params, tolerance: f32) -> f32 {
         match self.width_ratio(frame, params) {
-            Some(ratio) if off_by_more(ratio, params.mask_width_tolerance) => {
+            Some(ratio) if off_by_more(ratio, tolerance) => {
                 (1.0 / ratio.clamp(MIN_CORRECTION, MAX_CORRECTION)) as f32
             }
             _ => 1.0,
