@@ -362,10 +362,20 @@ fn after_a_second_pass_masks_follow_the_width_and_only_widen() {
     // whatever `mask_width_tolerance` says; thin rods enlarged for a second pass are
     // never drawn narrower.
     let params = Params::default();
+    let no_tolerance = Params {
+        mask_width_tolerance: 100.0,
+        ..Params::default()
+    };
     for (width, seed) in (1..=4).flat_map(|seed| [(32.0, seed), (3.0, seed)]) {
         let truth = scene(&spec(640, 480, width, seed));
-        let out = run(&jpeg(&truth.image), &truth.ends());
+        let bytes = jpeg(&truth.image);
+        let out = run(&bytes, &truth.ends());
         let seg = &out.segmentation;
+        let tolerant = run_with(&bytes, &truth.ends(), &no_tolerance);
+        assert_eq!(
+            tolerant.segmentation.mask_scale, seg.mask_scale,
+            "seed {seed}"
+        );
         let scaled = mask_iou(&out, &truth.mask);
         let plain_seg = Segmentation {
             mask_scale: 1.0,
