@@ -131,6 +131,17 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         k *= 0.5;
         (pass, frame) = again(&pass, k, k > MIN_CORRECTION)?;
     }
+    // Nothing found at the working scale: once more smaller, kept if it finds any
+    // (cables too wide to score at this one leave no width to correct by).
+    if k == 1.0 && pass.segmentation.cables.is_empty() && job.params.rescales_empty() {
+        let smaller = f64::from(job.params.empty_rescale);
+        let (second, at) = again(&pass, smaller, false)?;
+        if second.segmentation.cables.is_empty() {
+            pass.timings = second.timings;
+        } else {
+            (pass, frame, k) = (second, at, smaller);
+        }
+    }
     // Cables far wider or thinner than the engine's lengths suit (a closer or farther
     // camera): once more at the scale that makes them nominal (README, "Any camera").
     let corrected = pass

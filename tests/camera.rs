@@ -173,18 +173,7 @@ fn centreline_error(out: &Output, truth: &Scene) -> f32 {
         .iter()
         .flat_map(|c| c.centreline.iter().copied())
         .collect();
-    let distances: Vec<f32> = out
-        .segmentation
-        .cables
-        .iter()
-        .flat_map(|c| c.polyline.iter())
-        .map(|p| {
-            true_points
-                .iter()
-                .map(|q| (q[0] - p[0]).hypot(q[1] - p[1]))
-                .fold(f32::MAX, f32::min)
-        })
-        .collect();
+    let distances = common::distances_to_truth(out, &true_points);
     distances.iter().sum::<f32>() / distances.len().max(1) as f32
 }
 

@@ -22,6 +22,22 @@ pub fn mask_iou(out: &pipeline::Output, truth: &GrayImage) -> f64 {
     eval::iou(mask(out), truth)
 }
 
+/// Distance, pixels, from each point of the output's centrelines to the nearest of
+/// `truth` (points of the true centrelines, as dense as the distances should be exact).
+pub fn distances_to_truth(out: &pipeline::Output, truth: &[[f32; 2]]) -> Vec<f32> {
+    out.segmentation
+        .cables
+        .iter()
+        .flat_map(|c| c.polyline.iter())
+        .map(|p| {
+            truth
+                .iter()
+                .map(|q| (q[0] - p[0]).hypot(q[1] - p[1]))
+                .fold(f32::MAX, f32::min)
+        })
+        .collect()
+}
+
 /// A job on an image file with no given ends (the network finds them), its binary mask
 /// drawn but not encoded, the network beside SLIC.
 pub fn job<'a>(

@@ -69,6 +69,12 @@ pub struct Params {
     /// does, the photo is worked at half the size, and again at a quarter (`scale`,
     /// [`super::too_wide_for_the_field`]). 100: never.
     pub wide_field_ratio: f32,
+    /// A photo in which the first pass (at the working scale) finds no cable is
+    /// segmented once more at this times the working scale, and that pass is kept when
+    /// it finds any: cables much wider than nominal read little lateral contrast and
+    /// score under the floors at the working scale, so no width is read to correct the
+    /// scale by (README, "Any camera"). 1: never.
+    pub empty_rescale: f32,
 
     // --- graph ---
     /// Histogram bins per HSV channel; the histogram is joint (bins³ cells)
@@ -278,11 +284,17 @@ pub struct Params {
     /// its lateral contrast is low (a dark cable on a dark background).
     pub field_trust: f32,
     /// A walk that, within this many superpixel steps of its seed, finds nothing ahead
-    /// of its colour while the field is sure (`field_trust`) it stands on a cable (a
-    /// ferrule's collar, a sleeve or a label between the end and the cable) steps once,
-    /// by the field alone, onto a vertex the field is sure of and whose direction the
-    /// step follows, and takes that vertex's colour as the cable's. 0: never.
+    /// of its colour while the field calls where it stands cable (`field_collar_head`;
+    /// a ferrule's collar, a sleeve or a label between the end and the cable) steps
+    /// once, by the field alone, onto a vertex the field is sure of (`field_trust`) and
+    /// whose direction the step follows, and takes that vertex's colour as the cable's.
+    /// 0: never.
     pub field_recolour_steps: f32,
+    /// Least cable probability of the vertex a walk stands on for the step by the field
+    /// alone (`field_recolour_steps`): more likely cable than not. A collar of another
+    /// colour fills whole superpixels when cables are wide, and the field is less sure
+    /// of it than of the insulation beyond.
+    pub field_collar_head: f32,
     /// A walk that comes within `close_radius_px` of another end closes on it only when
     /// its heading agrees with the field's direction at that end at least this much
     /// ([`crate::engine::field::alignment`]: 1 along, 0 across, 1/2 where the field has
@@ -343,6 +355,7 @@ impl Default for Params {
             width_tolerance: 1.4,
             mask_width_tolerance: 1.3,
             wide_field_ratio: 2.5,
+            empty_rescale: 0.5,
             hist_bins: 4,
             neighbourhood_order: 3,
             jump_order: 5,
@@ -410,6 +423,7 @@ impl Default for Params {
             field_gap_min_cable: 0.02,
             field_trust: 0.6,
             field_recolour_steps: 2.0,
+            field_collar_head: 0.5,
             field_close_min_alignment: 0.25,
             field_through_factor: 0.5,
             quality_field_exponent: 1.0,
@@ -473,6 +487,7 @@ impl Params {
             sharpen_amount: 0.0,
             width_tolerance: 100.0,
             wide_field_ratio: 100.0,
+            empty_rescale: 1.0,
             end_confirm_px: 0.0,
             twins: false,
             ..Self::default()
@@ -483,6 +498,12 @@ impl Params {
     /// ([`Params::wide_field_ratio`] under 100).
     pub fn probes_wide_cables(&self) -> bool {
         self.wide_field_ratio < 100.0
+    }
+
+    /// Whether a photo whose first pass finds no cable is segmented again smaller
+    /// ([`Params::empty_rescale`] under 1).
+    pub fn rescales_empty(&self) -> bool {
+        self.empty_rescale < 1.0
     }
 
     /// The least score of a reported cable: `field_min_cable_score` when a cable field

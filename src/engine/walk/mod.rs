@@ -34,10 +34,11 @@
 //! superpixels — a crossing, a terminal's metal — but not cross the background from one
 //! cable to another), or when its contrast is below `min_contrast` unless the field is
 //! sure (p ≥ `field_trust`) that it is a cable. Within `field_recolour_steps` of its
-//! seed, a walk refused on colour alone where the field is sure it stands on a cable
-//! (a ferrule's collar or a sleeve between the end and the cable's insulation) steps
-//! once by the field alone: onto the best vertex the field is sure of, the step along
-//! the field's direction at both, whose colour becomes the walk's model.
+//! seed, a walk refused on colour alone where the field calls where it stands cable
+//! (p ≥ `field_collar_head`: a ferrule's collar or a sleeve between the end and the
+//! cable's insulation) steps once by the field alone: onto the best vertex the field
+//! is sure of, the step along the field's direction at both, whose colour becomes the
+//! walk's model.
 //!
 //! A walk ends on reaching another seed (within r, and within
 //! `close_max_lateral_steps` superpixel steps of the walk's line, so a walk passing the
@@ -311,7 +312,7 @@ impl<'a> Walker<'a> {
                 && dist(here, seed.point) <= p.field_recolour_steps * self.side_px
                 && self
                     .vertex_field(head)
-                    .is_some_and(|f| f.cable >= p.field_trust);
+                    .is_some_and(|f| f.cable >= p.field_collar_head);
             if reseed {
                 found = self
                     .best_candidate(id, head, here, dir, jump, true)
@@ -542,6 +543,17 @@ mod tests {
         seeds: &[Seed],
         params: &Params,
     ) -> Vec<Walk> {
+        walks_on_a_graded_line(line, |col| f32::from(cable(col)), seeds, params)
+    }
+
+    /// [`walks_on_a_line`] where the field's cable probability on the middle row's
+    /// cells is `cable` of the cell's column (0 elsewhere).
+    fn walks_on_a_graded_line(
+        line: impl Fn(usize) -> u8,
+        cable: impl Fn(usize) -> f32,
+        seeds: &[Seed],
+        params: &Params,
+    ) -> Vec<Walk> {
         let (w, h) = (200usize, 60usize);
         let labels: Vec<u32> = (0..w * h)
             .map(|p| ((p / w) / 20 * 10 + p % w / 20) as u32)
@@ -566,7 +578,13 @@ mod tests {
             height: 6,
             cell_px: [10.0, 10.0],
             cable: (0..120)
-                .map(|i| f32::from((2..4).contains(&(i / 20)) && cable(i % 20)))
+                .map(|i| {
+                    if (2..4).contains(&(i / 20)) {
+                        cable(i % 20)
+                    } else {
+                        0.0
+                    }
+                })
                 .collect(),
             orientation: vec![[1.0, 0.0]; 120],
         };
@@ -630,10 +648,11 @@ mod tests {
         assert!(on_it.iter().all(|w| w.through), "{walks:?}");
     }
 
-    #[test]
-    fn a_walk_passes_a_collar_of_another_colour_between_its_end_and_the_cable() {
-        // A dark cable from the left edge to x = 80, then a white collar to its end at
-        // x = 120 (superpixels 14 and 15); the field sees cable all along.
+    /// Whether a walk from the end of a dark cable from the left edge to x = 80, then a
+    /// white collar to its end at x = 120 (superpixels 14 and 15), where the field's
+    /// cable probability is `cable` of the cell's column, follows the cable to the
+    /// left edge under `params`.
+    fn passes_the_collar(cable: impl Fn(usize) -> f32, params: &Params) -> bool {
         let collared = |x: usize| match x {
             0..80 => 40,
             80..120 => 230,
@@ -643,17 +662,39 @@ mod tests {
             point: [118.0, 30.0],
             vertex: 15,
         };
-        let along = |params: &Params| {
-            walks_on_a_line(collared, |col| col < 12, &[end], params)
-                .iter()
-                .any(|w| w.end == WalkEnd::Border && w.vertices.contains(&10))
-        };
+        walks_on_a_graded_line(collared, cable, &[end], params)
+            .iter()
+            .any(|w| w.end == WalkEnd::Border && w.vertices.contains(&10))
+    }
+
+    #[test]
+    fn a_walk_passes_a_collar_of_another_colour_between_its_end_and_the_cable() {
+        // The field sees cable all along.
+        let along = |params: &Params| passes_the_collar(|col| f32::from(col < 12), params);
         assert!(along(&Params::default()));
         let never = Params {
             field_recolour_steps: 0.0,
             ..Params::default()
         };
         assert!(!along(&never), "the collar this rule passes");
+    }
+
+    #[test]
+    fn a_collar_the_field_is_less_sure_of_than_the_cable_is_passed() {
+        // The field calls the collar (x 80-120) cable at 0.55 only, as it does a
+        // ferrule's sleeve filling whole superpixels of a wide cable.
+        let cable = |col: usize| match col {
+            0..8 => 0.95,
+            8..12 => 0.55,
+            _ => 0.0,
+        };
+        let along = |params: &Params| passes_the_collar(cable, params);
+        assert!(along(&Params::default()));
+        let sure_only = Params {
+            field_collar_head: Params::default().field_trust,
+            ..Params::default()
+        };
+        assert!(!along(&sure_only), "a head the field is sure of, as before");
     }
 
     #[test]
