@@ -8,7 +8,7 @@ mod common;
 use std::process::Command;
 
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, Ends, OnnxDetector};
-use ariadne_dlo::engine::{self, Deadline, Params};
+use ariadne_dlo::engine::{self, Deadline, Params, geometry, spline};
 use ariadne_dlo::eval::{self, TERMINAL_MATCH_PX};
 use image::imageops::FilterType;
 
@@ -318,29 +318,14 @@ fn a_photo_in_which_nothing_is_found_is_looked_at_smaller() {
     let run = |params: &Params| common::photo_alone(&view.bytes, &network, params, true);
     let (out, off) = (run(&Params::default()), run(&never));
     // Median distance of the found centrelines' points to the nearest annotated
-    // centreline (densified to 1 px).
+    // centreline (resampled every pixel).
     let truth: Vec<[f32; 2]> = view
         .centrelines
         .iter()
-        .flat_map(|line| {
-            line.windows(2).flat_map(|w| {
-                let n = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]).ceil().max(1.0) as usize;
-                (0..n).map(move |i| {
-                    let t = i as f32 / n as f32;
-                    [
-                        w[0][0] + t * (w[1][0] - w[0][0]),
-                        w[0][1] + t * (w[1][1] - w[0][1]),
-                    ]
-                })
-            })
-        })
+        .flat_map(|line| spline::resample(line, 1.0))
         .collect();
     let mut off_truth = common::distances_to_truth(&out, &truth);
-    off_truth.sort_by(f32::total_cmp);
-    let median = off_truth
-        .get(off_truth.len() / 2)
-        .copied()
-        .unwrap_or(f32::MAX);
+    let median = geometry::median(&mut off_truth, f32::total_cmp).unwrap_or(f32::MAX);
     let scale = out.segmentation.working_scale;
     eprintln!(
         "found {} cable(s) at working scale {scale:.2}, mask IoU {:.3}, centreline {median:.1} px from the truth's (median)",
