@@ -181,6 +181,9 @@ const THROUGH_MIN_ALIGNMENT: f32 = 0.8;
 /// cable that changes colour runs on the same way; the tip of an end pushed against
 /// another cable meets that cable at an angle.
 const RECOLOUR_MIN_ALIGNMENT: f32 = 0.8;
+/// How many superpixel steps behind a seed another seed marks the same terminal
+/// ([`Walker::end_behind`]): as far as [`Walker::runs_on_behind`] looks.
+const BEHIND_STEPS: f32 = 2.0;
 /// Largest Lab distance from the walk's opening colour for the photo behind a seed to
 /// be the same cable.
 const THROUGH_MAX_LAB: f32 = 20.0;
@@ -402,6 +405,9 @@ impl<'a> Walker<'a> {
             return false;
         }
         let u = [(out[0] - seed[0]) / d, (out[1] - seed[1]) / d];
+        if self.end_behind(seed, u) {
+            return false;
+        }
         let first = &vertices[1..vertices.len().min(1 + OPENING_VERTICES)];
         let mut colour = [0.0f32; 3];
         for &v in first {
@@ -426,6 +432,21 @@ impl<'a> Walker<'a> {
             })
             .count();
         2 * on > samples + 1
+    }
+
+    /// Whether another seed lies just behind `seed` against the direction `u` a walk
+    /// opens along: within [`BEHIND_STEPS`] superpixel steps back, and off the line
+    /// through the seed along `u` by at most one step. The network often marks one
+    /// terminal twice, where the insulation ends and at the metal tip beyond it; the
+    /// tip, of a pale cable's colour and called cable by the field, then reads as the
+    /// cable running on behind the insulation's end ([`Self::runs_on_behind`]).
+    fn end_behind(&self, seed: [f32; 2], u: [f32; 2]) -> bool {
+        self.seeds.iter().any(|other| {
+            let d = [seed[0] - other.point[0], seed[1] - other.point[1]];
+            let back = d[0] * u[0] + d[1] * u[1];
+            let across = (d[0] * u[1] - d[1] * u[0]).abs();
+            back > 0.0 && back <= BEHIND_STEPS * self.side_px && across <= self.side_px
+        })
     }
 
     /// Whether the step from `here` (on vertex `head`) to vertex `to` runs along the
@@ -646,6 +667,34 @@ mod tests {
             .collect();
         assert_eq!(on_it.len(), 2, "{walks:?}");
         assert!(on_it.iter().all(|w| w.through), "{walks:?}");
+    }
+
+    #[test]
+    fn a_terminal_marked_twice_is_no_cable_running_on() {
+        let p = Params::default();
+        // A cable from the left edge to x = 120, where its insulation ends, and its
+        // metal tip on to x = 160, of the same colour and called cable by the field.
+        let (line, cable) = (dark_to(160), |col: usize| col < 16);
+        let insulation = Seed {
+            point: [118.0, 30.0],
+            vertex: 15,
+        };
+        let tip = Seed {
+            point: [158.0, 30.0],
+            vertex: 17,
+        };
+        let to_the_edge = |seeds: &[Seed]| {
+            walks_on_a_line(&line, cable, seeds, &p)
+                .into_iter()
+                .find(|w| w.seed == 0 && w.end == WalkEnd::Border && w.vertices.contains(&10))
+        };
+        // Alone, the end's tip reads as the cable running on behind it...
+        let alone = to_the_edge(&[insulation]);
+        assert!(alone.as_ref().is_some_and(|w| w.through), "{alone:?}");
+        // ... but the network marked the tip's end too: the walk follows the end's own
+        // cable.
+        let twice = to_the_edge(&[insulation, tip]);
+        assert!(twice.as_ref().is_some_and(|w| !w.through), "{twice:?}");
     }
 
     /// Whether a walk from the end of a dark cable from the left edge to x = 80, then a
