@@ -188,6 +188,12 @@ const BEHIND_STEPS: f32 = 2.0;
 /// be the same cable.
 const THROUGH_MAX_LAB: f32 = 20.0;
 
+/// The paper's colour likelihood p_V of a step onto a superpixel whose histogram
+/// intersects the walk's colour model by `similarity` (`c_visual`).
+fn visual_likelihood(similarity: f32, params: &Params) -> f32 {
+    1.0 / (1.0 + params.c_visual * (1.0 - similarity))
+}
+
 /// How far inside the frame a border walk's exit is placed (`Walk::end_point`), so
 /// that what is read there is the photo's last pixels.
 const EXIT_INSET_PX: f32 = 1.0;
@@ -346,7 +352,7 @@ impl<'a> Walker<'a> {
                 recoloured = true;
                 self.model.copy_from_slice(hist);
             } else {
-                log_visual += (1.0 / (1.0 + p.c_visual * (1.0 - sim))).ln();
+                log_visual += visual_likelihood(sim, p).ln();
                 let rate = p.model_rate;
                 for (m, h) in self.model.iter_mut().zip(hist) {
                     *m = (1.0 - rate) * *m + rate * h;

@@ -1,7 +1,7 @@
 //! Scoring one step of a walk: the likelihoods of every candidate, the field's term,
 //! and the rule that refuses the best one (module docs of [`super`]).
 
-use super::{Candidate, Walker};
+use super::{Candidate, Walker, visual_likelihood};
 use crate::engine::field::{GAP_SAMPLE_PX, VertexField, alignment};
 use crate::engine::geometry::{dist3, norm};
 use crate::engine::graph::intersection;
@@ -42,7 +42,7 @@ impl Walker<'_> {
             let pv = if colour_blind {
                 1.0
             } else {
-                1.0 / (1.0 + p.c_visual * (1.0 - similarity))
+                visual_likelihood(similarity, p)
             };
             let curvature = (p.kappa * (cos - 1.0)).exp();
             let pd = 1.0 / (1.0 + p.c_distance * d / p.max_step_px);
