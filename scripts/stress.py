@@ -5,8 +5,9 @@ Backgrounds from white to black and saturated card, cables of every colour (blac
 white among them) that cross, run out of the frame at both ends, or end in view with a
 metal terminal; shaded (a darker rim, a lighter core), 7-11 px wide at 640x480, smooth
 (bends no tighter than about 40 px); and two kinds on any of those backgrounds: thin
-rods 3-5 px wide with blunt ends (`thin`), and pairs of same-colour cables lying side by
-side, 0-4 px apart (`pairs`). One folder per kind, so that `ariadne eval --dataset DIR`
+rods 3-5 px wide with blunt ends (`thin`), pairs of same-colour cables lying side by
+side, 0-4 px apart (`pairs`), and cables that loop over themselves once (`loops`, a loop
+30-70 px in radius). One folder per kind, so that `ariadne eval --dataset DIR`
 reports each kind on its own row:
 
     training/.venv/bin/python scripts/stress.py /tmp/stress
@@ -41,7 +42,7 @@ BACKGROUNDS = {
 }
 # One folder each: the background kinds, then thin rods and same-colour pairs on any of
 # them (appended, so the scenes of the first four stay as they were).
-KINDS = list(BACKGROUNDS) + ["thin", "pairs"]
+KINDS = list(BACKGROUNDS) + ["thin", "pairs", "loops"]
 CABLE_COLOURS = [
     (220, 220, 215),  # white
     (35, 35, 38),  # black
@@ -68,6 +69,42 @@ def smooth_path(rng, start, heading, steps):
         p = p + [math.cos(theta), math.sin(theta)]
         points.append(p.copy())
     return np.array(points)
+
+
+def loop_cable(rng):
+    """A cable that crosses itself once: it enters the frame, turns a full circle 30-70 px
+    in radius, give or take 50° (all of the loop at least 20 px in view), and runs on
+    out of the frame or to an end in view."""
+    while True:
+        side = rng.integers(4)
+        start = [(rng.uniform(80, W - 80), 0.0), (W - 1.0, rng.uniform(80, H - 80)),
+                 (rng.uniform(80, W - 80), H - 1.0), (0.0, rng.uniform(80, H - 80))][side]
+        heading = [math.pi / 2, math.pi, -math.pi / 2, 0.0][side] + rng.uniform(-0.5, 0.5)
+        radius = rng.uniform(30.0, 70.0)
+        turn = rng.choice([-1.0, 1.0])
+        # A full turn and up to about 50° more or less: the cable leaves the loop at
+        # that angle to the way it came in, crossing itself at that angle.
+        total = 2 * math.pi + rng.uniform(-0.9, 0.9)
+        begin = rng.uniform(80.0, 220.0)
+        span = 2 * math.pi * radius
+        p = np.array(start, dtype=float)
+        points = [p.copy()]
+        drift = rng.uniform(-0.4, 0.4) / 600.0
+        for i in range(1, 1400):
+            t = min(max((i - begin) / span, 0.0), 1.0)
+            theta = heading + drift * i + turn * total * t
+            p = p + [math.cos(theta), math.sin(theta)]
+            points.append(p.copy())
+        path = np.array(points)
+        loop = path[int(begin):int(begin + span)]
+        out = next((i for i in range(5, len(path)) if not inside(path[i], 0.0)), None)
+        if out is None or out < begin + span + 60 or not all(inside(q, 20.0) for q in loop):
+            continue
+        path = np.clip(path[:out], 0.0, [W - 1.0, H - 1.0])
+        cut = int(rng.uniform(begin + span + 60, out + 60))
+        if cut < out and inside(path[cut], INSIDE):
+            return path[:cut]
+        return path
 
 
 def inside(p, margin):
@@ -168,7 +205,7 @@ def parallel(path, offset):
 def scene(rng, kind):
     """A photo of `kind` and its centrelines with their mask widths: a background kind
     with cables 7-11 px wide; `thin`, rods 3-5 px wide; `pairs`, one or two pairs of
-    same-colour cables side by side (0-4 px apart) among others. The last two on any
+    same-colour cables side by side (0-4 px apart) among others. The last three on any
     background kind. Masks are the dataset's 7 px strokes, but a rod's is as wide as the
     rod: a 7 px stroke would be wider than the object."""
     backdrop = kind if kind in BACKGROUNDS else list(BACKGROUNDS)[rng.integers(len(BACKGROUNDS))]
@@ -185,7 +222,14 @@ def scene(rng, kind):
                 if len(line) > 100:
                     draw_cable(draw, line, colour, width)
                     lines.append((line, MASK_WIDTH))
-    for _ in range(int(rng.integers(0, 3) if kind == "pairs" else rng.integers(2, 6))):
+    if kind == "loops":
+        for _ in range(int(rng.integers(1, 3))):
+            path = loop_cable(rng)
+            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+            draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
+            lines.append((path, MASK_WIDTH))
+    extra = rng.integers(0, 3) if kind in ("pairs", "loops") else rng.integers(2, 6)
+    for _ in range(int(extra)):
         path = any_cable(rng)
         colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
         if kind == "thin":

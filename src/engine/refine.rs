@@ -107,6 +107,8 @@ struct Profiles {
     step: f32,
     min_background_de: f32,
     min_width: f32,
+    /// Widest core between the two halves of an outline ([`across_outline`]), pixels.
+    max_core: f32,
 }
 
 /// Moves each point of `line` onto the cable centre found across it (see module docs),
@@ -125,6 +127,7 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         step: params.refine_profile_step_px,
         min_background_de: params.refine_min_background_de,
         min_width: params.refine_min_width_px,
+        max_core: OUTLINE_MAX_CORE * params.nominal_width_px,
     };
     let normal = normals(line);
     let steps = (radius / settings.step).round() as i32;
@@ -263,6 +266,7 @@ fn read_profile(
         .flat_map(|d| [centre - d, centre + d])
         .find(|&j| m[j] > 0.0)?;
     let (lo, hi) = across_highlights(profile, &m, &fg, run_around(&m, start)?, min_de);
+    let (lo, hi) = across_outline(profile, &m, (lo, hi), centre, settings);
     let across = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
     Some(Reading {
         plain: across(without_shadowed_flanks(
@@ -397,6 +401,69 @@ fn across_highlights(
         }
         lo = left.map_or(lo, |run| run.0);
         hi = right.map_or(hi, |run| run.1);
+    }
+}
+
+/// Widest core of an outlined cable, nominal widths ([`across_outline`]).
+const OUTLINE_MAX_CORE: f32 = 1.5;
+
+/// The run `lo..=hi` of positive margins `m` joined with a run beside it when the two
+/// are the outline of one cable: a cable of the background's own colour shows only its
+/// darker rims (a white cable on a white table), each a thin run with the cable's light
+/// core between them, which by contrast alone reads as a cable a third as wide, its
+/// centre on one rim. Joined when the run beyond has the run's colour (mean Lab within
+/// `2 min_de`), the core between them is wider than either run, no wider than
+/// `max_core`, and lighter than both runs. Two cables side by side are wider than the
+/// gap between them; of two such runs, the one whose join centres nearer the profile's
+/// centre is taken.
+fn across_outline(
+    profile: &[[f32; 3]],
+    m: &[f32],
+    (lo, hi): (usize, usize),
+    centre: usize,
+    settings: Profiles,
+) -> (usize, usize) {
+    let mean = |a: usize, b: usize| {
+        let n = (b - a + 1) as f32;
+        profile[a..=b].iter().fold([0.0f32; 3], |acc, s| {
+            [acc[0] + s[0] / n, acc[1] + s[1] / n, acc[2] + s[2] / n]
+        })
+    };
+    let max_core = (settings.max_core / settings.step).round() as usize;
+    let colour = mean(lo, hi);
+    let width = hi - lo + 1;
+    // The outline's other half across `core` (its first and last sample), given the
+    // run `other` beyond it.
+    let outline = |core: (usize, usize), other: (usize, usize)| {
+        let core_width = core.1 + 1 - core.0;
+        let lighter = mean(core.0, core.1)[0] > colour[0].max(mean(other.0, other.1)[0]);
+        (core_width > width.max(other.1 + 1 - other.0)
+            && core_width <= max_core
+            && lighter
+            && dist3(mean(other.0, other.1), colour) < 2.0 * settings.min_background_de)
+            .then_some(other)
+    };
+    let left = (lo.saturating_sub(max_core + 1)..lo)
+        .rev()
+        .find(|&j| m[j] > 0.0)
+        .and_then(|j| Some((j, run_around(m, j)?)))
+        .and_then(|(j, run)| outline((j + 1, lo - 1), run))
+        .map(|run| (run.0, hi));
+    let right = (hi + 1..(hi + max_core + 2).min(m.len()))
+        .find(|&j| m[j] > 0.0)
+        .and_then(|j| Some((j, run_around(m, j)?)))
+        .and_then(|(j, run)| outline((hi + 1, j - 1), run))
+        .map(|run| (lo, run.1));
+    let off = |(a, b): (usize, usize)| (a + b).abs_diff(2 * centre);
+    match (left, right) {
+        (Some(l), Some(r)) => {
+            if off(l) <= off(r) {
+                l
+            } else {
+                r
+            }
+        }
+        (l, r) => l.or(r).unwrap_or((lo, hi)),
     }
 }
 
@@ -627,6 +694,22 @@ mod tests {
         // A red cable (rows 16-25, centre 20.5) whose lower half is in its own shade.
         let lab = table(&[(16, 20, [200, 40, 40]), (21, 25, [110, 20, 20])]);
         assert_refined_between(&lab, 21.0, 20.0, 21.0);
+    }
+
+    #[test]
+    fn a_cable_of_the_table_s_colour_is_read_between_its_rims() {
+        // A cable of the table's own colour (rows 16-26, centre 21) shows only its grey
+        // rims (rows 16-17 and 25-26). Started on the upper rim, the line moves to the
+        // middle, and the width read is the cable's, not a rim's.
+        let rim = [110, 120, 116];
+        let lab = table(&[(16, 17, rim), (25, 26, rim)]);
+        assert_refined_between(&lab, 17.0, 20.5, 21.5);
+        let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, 17.0]).collect();
+        let width = refine(&line, &lab, &Params::default()).width_px.unwrap();
+        assert!((9.0..12.0).contains(&width), "{width}");
+        // Two grey cables 4 px wide, 2 px apart, are no outline: each stays itself.
+        let pair = table(&[(15, 18, rim), (21, 24, rim)]);
+        assert_refined_between(&pair, 17.0, 16.0, 17.5);
     }
 
     #[test]
