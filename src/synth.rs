@@ -266,11 +266,15 @@ pub enum Case {
     /// Two cables of one colour laid together across the whole frame, light on a dark
     /// background: no end in view, one band to the network and the superpixels.
     TwinsNoEndInView,
+    /// A cable that turns a full circle and a little more on its way, crossing itself at
+    /// a shallow angle (about 25°): at the crossing the way on is straighter than the
+    /// way into the loop.
+    Curl,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 10] = [
+    pub const ALL: [Case; 11] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -281,6 +285,7 @@ impl Case {
         Case::Crossing,
         Case::Twins,
         Case::TwinsNoEndInView,
+        Case::Curl,
     ];
 
     /// Width of the case's cables, pixels.
@@ -377,6 +382,21 @@ pub fn case(case: Case) -> Scene {
                 [140.0 + 32.0 * u - 90.0 * u.sin(), 250.0 - 90.0 * u.cos()]
             };
             ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
+        }
+        Case::Curl => {
+            // 1 px steps: 220 px to the right from (70, 330), a turn of 2π + 0.45 rad
+            // towards the top at 45 px radius (the loop above the line), 220 px on.
+            let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220.0);
+            let looped = (turn * radius).round() as usize;
+            let mut p = [70.0f32, 330.0];
+            let mut path = vec![p];
+            for i in 0..2 * straight as usize + looped {
+                let along = (i as f32 - straight).clamp(0.0, looped as f32);
+                let heading = -turn * along / looped as f32;
+                p = [p[0] + heading.cos(), p[1] + heading.sin()];
+                path.push(p);
+            }
+            ([228, 226, 220], vec![(path, [40, 90, 200])])
         }
         Case::CrossingLoop => {
             // The same curve with a = 40, b = 100 over one period about u = 0: it

@@ -272,14 +272,14 @@ fn exact_field(s: &ariadne_dlo::synth::Scene) -> engine::CableField {
 /// In `TerminalAgainstCable` the walks along the first cable pass within reach of the
 /// second cable's terminal, across the field's direction there, and go on
 /// (`field_close_min_alignment`; with it at 0 they close on it and a cable is lost).
-/// Not `CrossingLoop`: past its crossing (85° between the branches) the walk from the
-/// left steps onto the branch leaving the loop rather than into the loop, and the loop
-/// is found as a cable of its own (README, "How the engine uses the field"). With the
-/// network's field the whole cable is found (`tests/e2e.rs`).
+/// In `Curl` the walk crosses the place where the cable crosses itself at a shallow
+/// angle, leaving the loop out; the loop is taken in from the field (`loops`; with it
+/// off this test fails on `Curl`). `CrossingLoop`, left out here until 2026-11-23, is
+/// found whole with or without that rule.
 #[test]
 fn an_exact_field_recovers_the_hard_cases() {
     use ariadne_dlo::synth::Case;
-    for case in Case::ALL.into_iter().filter(|&c| c != Case::CrossingLoop) {
+    for case in Case::ALL {
         let s = ariadne_dlo::synth::case(case);
         let (found, err) = with_exact_field(&s, &s.terminals());
         assert_eq!(found, s.cables.len(), "{case:?}");
@@ -360,7 +360,8 @@ fn with_field(
 /// engine uses the field"). With their ends in view both are found (the tests above).
 /// In `Crossing` the two cables make one X-shaped piece; its two farthest superpixels
 /// are the ends of one branch each, and the other two ends are seeded as the tips of
-/// its other branches. Nor `CrossingLoop`, left out above, nor `TerminalAgainstCable`,
+/// its other branches. Nor `CrossingLoop` (its piece of field is one loop with two
+/// tails; not found whole from it), nor `TerminalAgainstCable`,
 /// whose two cables the field joins into one T-shaped piece: the first cable is found,
 /// but the second's end touches the first, so it is the tip of no branch and no walk
 /// along the second reaches a seed.

@@ -3,7 +3,9 @@
 
 use image::RgbImage;
 
+use super::Params;
 use super::chains::Course;
+use super::color::LabImage;
 use super::field::CableField;
 use super::geometry::{border_exit, dist, heading, median, polyline_length};
 use super::graph::Graph;
@@ -116,39 +118,20 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             if let Some(exit) = border_exit(last, dir, sp.width, sp.height, reach) {
                 points.push(exit);
                 weights.push(1.0);
-                // Held there as firmly as an end: profiles cannot be read past the frame,
-                // and the refinement would otherwise carry the last points out of it.
+                // Held there as firmly as an end ([`fit_refined`]).
                 far_anchor = Some((exit, params.end_weight));
             }
             None
         }
         FarEnd::Open => None,
     };
-    let mut spline = BSpline::fit(&points, &weights, params.knot_spacing_px, params.smoothing)?;
-    let mut polyline = spline.sample(params.polyline_step_px);
-    let mut width = None;
-    let mut ridge_share = None;
-    if params.refine {
-        for _ in 0..params.refine_passes {
-            let refined = refine::refine(&polyline, lab, params);
-            width = refined.width_px.or(width);
-            ridge_share = refined.ridge_share.or(ridge_share);
-            let mut pts = refined.points;
-            let mut w = vec![1.0; pts.len()];
-            // The given ends stay where they were given, an exit on the frame's edge.
-            if let Some(start) = start {
-                pts[0] = start;
-                w[0] = params.end_weight;
-            }
-            if let Some((point, weight)) = far_anchor {
-                let last = pts.len() - 1;
-                pts[last] = point;
-                w[last] = weight;
-            }
-            spline = BSpline::fit(&pts, &w, params.knot_spacing_px, params.smoothing)?;
-            polyline = spline.sample(params.polyline_step_px);
-        }
-    }
+    let anchors = [start.map(|p| (p, params.end_weight)), far_anchor];
+    let Fitted {
+        spline,
+        polyline,
+        width,
+        ridge_share,
+    } = fit_refined(&points, &weights, anchors, lab, params)?;
     let width_px = width.unwrap_or_else(|| fallback_width(&course.vertices, graph, sp));
     let length_px = polyline_length(&polyline);
     // With a field, the cable must lie on cable pixels: its score is scaled by the share
@@ -168,6 +151,59 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
         width_px,
         ridge_share: ridge_share.unwrap_or(1.0),
         score: (course.score * on_cable).clamp(0.0, 1.0),
+    })
+}
+
+/// A centreline fitted and refined on the image ([`fit_refined`]).
+pub(super) struct Fitted {
+    /// The final spline.
+    pub spline: BSpline,
+    /// Its dense samples.
+    pub polyline: Vec<[f32; 2]>,
+    /// The width the refinement read, when it read one.
+    pub width: Option<f32>,
+    /// The share of its profiles that read a ridge, when it read any.
+    pub ridge_share: Option<f32>,
+}
+
+/// The spline through `points` (fit weights `weights`), then, with `params.refine`,
+/// `refine_passes` times refined on `lab` and fitted again; `anchors` (a point and its
+/// weight) hold the first and the last point where they are through every pass: a
+/// given end exactly, an exit on the frame's edge (profiles cannot be read past the
+/// frame, and the refinement would otherwise carry the last points out of it).
+pub(super) fn fit_refined(
+    points: &[[f32; 2]],
+    weights: &[f32],
+    anchors: [Option<([f32; 2], f32)>; 2],
+    lab: &LabImage,
+    params: &Params,
+) -> Option<Fitted> {
+    let mut spline = BSpline::fit(points, weights, params.knot_spacing_px, params.smoothing)?;
+    let mut polyline = spline.sample(params.polyline_step_px);
+    let (mut width, mut ridge_share) = (None, None);
+    if params.refine {
+        for _ in 0..params.refine_passes {
+            let refined = refine::refine(&polyline, lab, params);
+            width = refined.width_px.or(width);
+            ridge_share = refined.ridge_share.or(ridge_share);
+            let mut pts = refined.points;
+            let mut w = vec![1.0; pts.len()];
+            let last = pts.len() - 1;
+            for (i, anchor) in [0, last].into_iter().zip(anchors) {
+                if let Some((point, weight)) = anchor {
+                    pts[i] = point;
+                    w[i] = weight;
+                }
+            }
+            spline = BSpline::fit(&pts, &w, params.knot_spacing_px, params.smoothing)?;
+            polyline = spline.sample(params.polyline_step_px);
+        }
+    }
+    Some(Fitted {
+        spline,
+        polyline,
+        width,
+        ridge_share,
     })
 }
 

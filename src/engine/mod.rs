@@ -7,6 +7,7 @@
 //! [`refine`] (sub-pixel centreline, width) → [`render`] (masks, overlay); [`connectivity`]
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
+//! [`loops`] takes in the loop a cable was walked across where it crosses itself,
 //! [`twins`] splits a cable found over two of one colour laid together,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
@@ -26,6 +27,7 @@ pub mod exposure;
 pub mod field;
 pub mod geometry;
 pub mod graph;
+mod loops;
 mod orphans;
 pub mod pairing;
 mod params;
@@ -293,6 +295,20 @@ pub fn segment_oversegmented(
             cables.push(cable);
         }
         timings.walks += ms(t);
+    }
+    if let Some(field) = vertex_field.as_deref().filter(|_| params.loops) {
+        let t = Instant::now();
+        let ground = loops::Ground {
+            graph: &graph,
+            sp: &sp,
+            field,
+            seeds: &seeds,
+            lab: &lab,
+            image,
+            params,
+        };
+        loops::close_loops(&mut cables, &mut end_cables, ground);
+        timings.splines += ms(t);
     }
     if params.twins {
         let t = Instant::now();

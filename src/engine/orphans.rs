@@ -126,7 +126,7 @@ fn branch_tips(
 /// Breadth-first search from `sources` over the superpixels `inside` marks: every one
 /// reached, in order, with its hops from the nearest source and the superpixel it was
 /// reached from (a source: itself) in `hops` and `parent`.
-fn search(
+pub(super) fn search(
     graph: &Graph,
     sources: &[u32],
     inside: &impl Fn(u32) -> bool,

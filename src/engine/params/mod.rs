@@ -206,6 +206,11 @@ pub struct Params {
     /// ends), and is no cable of its own (1 accepts every walk).
     pub pair_max_shared: f32,
 
+    // --- loops (see `loops`) ---
+    /// A cable walked straight across the place where it loops over itself takes the
+    /// loop in, where the field shows it (with a field only).
+    pub loops: bool,
+
     // --- twins (see `twins`) ---
     /// Cables found as one over two of one colour side by side are split in two.
     pub twins: bool,
@@ -396,6 +401,7 @@ impl Default for Params {
             quality_contrast_exponent: 2.0,
             join_min_length: 0.5,
             pair_max_shared: 0.45,
+            loops: true,
             twins: true,
             twin_min_share: 0.6,
             twin_max_cost: 0.5,
@@ -489,6 +495,7 @@ impl Params {
             wide_field_ratio: 100.0,
             empty_rescale: 1.0,
             end_confirm_px: 0.0,
+            loops: false,
             twins: false,
             ..Self::default()
         }

@@ -1,0 +1,346 @@
+//! A cable that loops over itself. Where a cable turns a full circle it crosses itself,
+//! and there its way on and the way into the loop both continue it smoothly: the walk
+//! takes the straighter, across the crossing, and leaves the loop out (found as a
+//! cable of its own from the ends of its unexplained piece of field, or not at all).
+//! The field still shows the loop: a piece of cable that leaves the cable and comes
+//! back to it where it left, with no end on it. Such a piece is walked round (a
+//! breadth-first course over its superpixels from where it leaves the cable to where
+//! it comes back) and spliced into the cable: the cable runs to where the loop leaves
+//! it, round the loop, and on from where the loop comes back, crossing itself there,
+//! and is fitted and refined again. A cable found along the loop alone is that loop,
+//! and is dropped.
+
+use super::Cable;
+use super::Params;
+use super::cable::{Fitted, fit_refined, median_rgb};
+use super::color::LabImage;
+use super::field::VertexField;
+use super::geometry::{dist, polyline_length};
+use super::graph::Graph;
+use super::orphans::search;
+use super::spline::resample;
+use super::superpixels::Superpixels;
+use super::walk::Seed;
+
+/// Shortest loop, nominal widths along its course (a circle about 2 widths across:
+/// tighter than a cable bends).
+const MIN_LENGTH: f32 = 12.0;
+/// Where a loop leaves its cable and where it comes back lie at most this many
+/// nominal widths apart along the cable (the crossing, and the stretch either side of
+/// it where the two branches still touch at a shallow crossing).
+const MAX_SPAN: f32 = 12.0;
+/// Where a loop leaves and comes back lie at least this many nominal widths from the
+/// cable's ends: a cable ending there is no cable crossing itself.
+const END_MARGIN: f32 = 2.0;
+/// The loop reaches at least this many nominal widths from the crossing.
+const MIN_REACH: f32 = 3.0;
+/// Least roundness of a loop (4π times the area its course encloses, closed at the
+/// crossing, over its perimeter squared: 1 for a circle, 0 for a course that runs
+/// out along something and back).
+const MIN_ROUNDNESS: f32 = 0.4;
+/// Spacing of the data points fitted along a loop, pixels: far denser than the
+/// superpixels along the rest of the cable, so that the fit's smoothing, made for
+/// bends no tighter than a cable's usual ones, does not shrink the loop.
+const LOOP_SPACING_PX: f32 = 2.0;
+/// A looped cable is fitted with knots this share of `knot_spacing_px` apart: a loop
+/// is tighter than the bends the spacing is made for (one of 30 px in radius, fitted
+/// with the usual knots, shrank to a third of its size).
+const LOOP_KNOT_SHARE: f32 = 0.5;
+/// Most of the loop's course that may lie along other cables (those crossing it).
+const ALONG_SHARE: f32 = 0.4;
+/// A cable with at most this share of its length away from the loop is the loop
+/// found on its own.
+const OWN_SHARE: f32 = 0.3;
+
+/// What finding loops reads: the image, its superpixels and graph, the field on
+/// them, the given ends and the parameters.
+#[derive(Clone, Copy)]
+pub(super) struct Ground<'a> {
+    pub graph: &'a Graph,
+    pub sp: &'a Superpixels,
+    pub field: &'a [VertexField],
+    pub seeds: &'a [Seed],
+    pub lab: &'a LabImage,
+    pub image: &'a image::RgbImage,
+    pub params: &'a Params,
+}
+
+/// Splices into every cable of `cables` the loop it was walked across (module docs),
+/// drops the cables found along those loops alone and renumbers the rest;
+/// `end_cables` (given end to cable) follows.
+pub(super) fn close_loops(
+    cables: &mut Vec<Cable>,
+    end_cables: &mut [Option<usize>],
+    ground: Ground<'_>,
+) {
+    let mut dropped = vec![false; cables.len()];
+    for i in 0..cables.len() {
+        if dropped[i] {
+            continue;
+        }
+        let Some(course) = find_loop(&cables[i], ground) else {
+            continue;
+        };
+        // The loop's own: cables along it with little of themselves elsewhere. The rest
+        // may cross it, but a piece that runs along them is theirs.
+        let tolerance =
+            |c: &Cable| 0.5 * c.width_px.max(ground.params.nominal_width_px) + 0.5 * ground.sp.step;
+        let dense = resample(&course.points, 2.0);
+        let others: Vec<usize> = (0..cables.len())
+            .filter(|&j| j != i && !dropped[j])
+            .collect();
+        let (alone, crossing): (Vec<usize>, Vec<usize>) = others.into_iter().partition(|&j| {
+            let other = &cables[j];
+            share_near(&other.polyline, &dense, tolerance(other)) >= 1.0 - OWN_SHARE
+        });
+        let on_others = dense
+            .iter()
+            .filter(|&&q| {
+                crossing.iter().any(|&j| {
+                    let other = &cables[j];
+                    other
+                        .polyline
+                        .iter()
+                        .any(|&o| dist(q, o) <= tolerance(other))
+                })
+            })
+            .count();
+        let owned = on_others as f32 > ALONG_SHARE * dense.len() as f32;
+        if owned {
+            continue;
+        }
+        if let Some(spliced) = splice(&cables[i], &course, ground) {
+            cables[i] = spliced;
+            for j in alone {
+                dropped[j] = true;
+            }
+        }
+    }
+    let mut id = vec![None; cables.len()];
+    let mut next = 0;
+    for (k, gone) in dropped.iter().enumerate() {
+        if !gone {
+            id[k] = Some(next);
+            next += 1;
+        }
+    }
+    for end in end_cables.iter_mut() {
+        *end = end.and_then(|old| id[old]);
+    }
+    let kept = std::mem::take(cables);
+    *cables = kept
+        .into_iter()
+        .zip(id)
+        .filter_map(|(mut cable, id)| {
+            cable.id = id?;
+            Some(cable)
+        })
+        .collect();
+}
+
+/// A loop found beside a cable: its course from where it leaves the cable (at arc
+/// length `leaves` along the cable's polyline) round to where it comes back (`returns`).
+struct LoopCourse {
+    /// Superpixel centroids along the loop.
+    points: Vec<[f32; 2]>,
+    /// Arc length along the cable where the loop leaves it.
+    leaves: f32,
+    /// Arc length along the cable where the loop comes back to it.
+    returns: f32,
+}
+
+/// The loop `cable` was walked across, if the field shows one (module docs): the
+/// longest course over superpixels the field calls cable and the cable does not cover,
+/// between two that touch the cable at most [`MAX_SPAN`] apart along it, at least
+/// [`MIN_LENGTH`] long, reaching [`MIN_REACH`] from the cable, all in view and with no
+/// given end on it.
+fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
+    let Ground {
+        graph, sp, field, ..
+    } = ground;
+    let p = ground.params;
+    let nominal = p.nominal_width_px;
+    let line = &cable.polyline;
+    if line.len() < 2 {
+        return None;
+    }
+    let on = covered_by(
+        line,
+        0.5 * cable.width_px.max(nominal) + 0.5 * sp.step,
+        ground,
+    );
+    let free = |v: u32| field[v as usize].cable >= p.field_orphan_level && !on[v as usize];
+    let arc = arc_lengths(line);
+    let centroid = |v: u32| graph.vertices[v as usize].centroid;
+    let along = |q: [f32; 2]| {
+        let nearest = (0..line.len())
+            .min_by(|&a, &b| dist(line[a], q).total_cmp(&dist(line[b], q)))
+            .unwrap_or(0);
+        arc[nearest]
+    };
+    // Free superpixels next to the cable, with where along it they touch it.
+    let total = arc[arc.len() - 1];
+    let margin = END_MARGIN * nominal;
+    let touching: Vec<(u32, f32)> = (0..graph.len() as u32)
+        .filter(|&v| free(v) && graph.neighbours(v).iter().any(|&u| on[u as usize]))
+        .map(|v| (v, along(centroid(v))))
+        .filter(|&(_, s)| s >= margin && s <= total - margin)
+        .collect();
+    let [w, h] = [sp.width as f32, sp.height as f32];
+    let in_view = |[x, y]: [f32; 2]| x.min(y).min(w - x).min(h - y) > sp.step;
+    let no_end = |q: [f32; 2]| {
+        ground
+            .seeds
+            .iter()
+            .all(|s| dist(s.point, q) > p.close_radius_px)
+    };
+    let mut hops = vec![u32::MAX; graph.len()];
+    let mut parent = vec![0; graph.len()];
+    let mut best: Option<(f32, LoopCourse)> = None;
+    for &(a, sa) in &touching {
+        let order = search(graph, &[a], &free, &mut hops, &mut parent);
+        for &(b, sb) in &touching {
+            if b == a || hops[b as usize] == u32::MAX || (sa - sb).abs() > MAX_SPAN * nominal {
+                continue;
+            }
+            let mut course = vec![b];
+            while let Some(&v) = course.last().filter(|&&v| v != a) {
+                course.push(parent[v as usize]);
+            }
+            course.reverse();
+            let points: Vec<[f32; 2]> = course.iter().map(|&v| centroid(v)).collect();
+            let length = polyline_length(&points);
+            let crossing = line[arc
+                .partition_point(|&s| s < 0.5 * (sa + sb))
+                .min(line.len() - 1)];
+            let reach = points
+                .iter()
+                .map(|&q| dist(q, crossing))
+                .fold(0.0, f32::max);
+            if length < MIN_LENGTH * nominal
+                || reach < MIN_REACH * nominal
+                || roundness(&points) < MIN_ROUNDNESS
+                || best.as_ref().is_some_and(|(l, _)| *l >= length)
+                || !points.iter().all(|&q| in_view(q) && no_end(q))
+            {
+                continue;
+            }
+            best = Some((
+                length,
+                LoopCourse {
+                    points,
+                    leaves: sa,
+                    returns: sb,
+                },
+            ));
+        }
+        for &v in &order {
+            hops[v as usize] = u32::MAX;
+        }
+    }
+    best.map(|(_, course)| course)
+}
+
+/// For every superpixel, whether its centroid lies within `reach` of `line` (those
+/// under the line and their neighbours are the only ones that can).
+fn covered_by(line: &[[f32; 2]], reach: f32, ground: Ground<'_>) -> Vec<bool> {
+    let Ground { graph, sp, .. } = ground;
+    let mut on = vec![false; graph.len()];
+    for &q in line {
+        let (x, y) = (q[0].round(), q[1].round());
+        if x < 0.0 || y < 0.0 || x as usize >= sp.width || y as usize >= sp.height {
+            continue;
+        }
+        let under = sp.labels[y as usize * sp.width + x as usize];
+        for &v in std::iter::once(&under).chain(graph.neighbours(under)) {
+            if !on[v as usize] && dist(graph.vertices[v as usize].centroid, q) <= reach {
+                on[v as usize] = true;
+            }
+        }
+    }
+    on
+}
+
+/// 4π times the area `points` enclose (closed from the last back to the first) over
+/// their perimeter squared.
+fn roundness(points: &[[f32; 2]]) -> f32 {
+    let n = points.len();
+    let twice_area: f32 = (0..n)
+        .map(|k| {
+            let (a, b) = (points[k], points[(k + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    let perimeter = polyline_length(points) + dist(points[n - 1], points[0]);
+    2.0 * std::f32::consts::PI * twice_area.abs() / (perimeter * perimeter).max(f32::EPSILON)
+}
+
+/// Arc length along `line` at each of its points.
+fn arc_lengths(line: &[[f32; 2]]) -> Vec<f32> {
+    std::iter::once(0.0)
+        .chain(line.windows(2).scan(0.0, |s, w| {
+            *s += dist(w[0], w[1]);
+            Some(*s)
+        }))
+        .collect()
+}
+
+/// Share of the points of `line` within `tolerance` of a point of `other`.
+fn share_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> f32 {
+    let near = line
+        .iter()
+        .filter(|&&q| other.iter().any(|&o| dist(q, o) <= tolerance))
+        .count();
+    near as f32 / line.len().max(1) as f32
+}
+
+/// `cable` run round `course`: its polyline to the later of where the loop leaves and
+/// comes back (the way into the loop continues the cable ahead), round the loop, and
+/// on from the earlier, crossing itself between them; fitted and refined again with
+/// its ends held. `None` when the fit fails.
+fn splice(cable: &Cable, course: &LoopCourse, ground: Ground<'_>) -> Option<Cable> {
+    let p = ground.params;
+    let line = &cable.polyline;
+    let (into, back, round) = if course.leaves >= course.returns {
+        (course.leaves, course.returns, course.points.clone())
+    } else {
+        let mut reversed = course.points.clone();
+        reversed.reverse();
+        (course.returns, course.leaves, reversed)
+    };
+    let arc = arc_lengths(line);
+    // The last point at or before an arc length.
+    let cut = |s: f32| arc.partition_point(|&a| a <= s).saturating_sub(1);
+    let step = ground.sp.step;
+    let mut points = resample(&line[..=cut(into)], step);
+    points.extend(resample(&round, LOOP_SPACING_PX));
+    points.extend(resample(&line[cut(back)..], step));
+    let mut weights = vec![1.0; points.len()];
+    let last = points.len() - 1;
+    let ends = [line[0], line[line.len() - 1]];
+    for (k, end) in [0, last].into_iter().zip(ends) {
+        points[k] = end;
+        weights[k] = p.end_weight;
+    }
+    let anchors = ends.map(|e| Some((e, p.end_weight)));
+    let tighter = Params {
+        knot_spacing_px: LOOP_KNOT_SHARE * p.knot_spacing_px,
+        ..p.clone()
+    };
+    let Fitted {
+        spline,
+        polyline,
+        width,
+        ridge_share,
+    } = fit_refined(&points, &weights, anchors, ground.lab, &tighter)?;
+    Some(Cable {
+        ends: [polyline[0], polyline[polyline.len() - 1]],
+        length_px: polyline_length(&polyline),
+        width_px: width.unwrap_or(cable.width_px),
+        color: median_rgb(ground.image, &polyline),
+        ridge_share: ridge_share.unwrap_or(cable.ridge_share),
+        spline,
+        polyline,
+        ..cable.clone()
+    })
+}
