@@ -151,9 +151,10 @@ struct LoopCourse {
 
 /// The loop `cable` was walked across, if the field shows one (module docs): the
 /// longest course over superpixels the field calls cable and the cable does not cover,
-/// between two that touch the cable at most [`MAX_SPAN`] apart along it, at least
-/// [`MIN_LENGTH`] long, reaching [`MIN_REACH`] from the cable, all in view and with no
-/// given end on it.
+/// between two that touch the cable at most [`MAX_SPAN`] apart along it and
+/// [`END_MARGIN`] from its ends, at least [`MIN_LENGTH`] long, reaching [`MIN_REACH`]
+/// from the crossing, at least [`MIN_ROUNDNESS`] round, all in view and with no given
+/// end on it.
 fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
     let Ground {
         graph, sp, field, ..

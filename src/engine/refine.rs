@@ -372,12 +372,7 @@ fn across_highlights(
     (mut lo, mut hi): (usize, usize),
     min_de: f32,
 ) -> (usize, usize) {
-    let mean = |a: usize, b: usize| {
-        let n = (b - a + 1) as f32;
-        profile[a..=b].iter().fold([0.0f32; 3], |acc, s| {
-            [acc[0] + s[0] / n, acc[1] + s[1] / n, acc[2] + s[2] / n]
-        })
-    };
+    let mean = |a: usize, b: usize| mean_lab(&profile[a..=b]);
     loop {
         let colour = mean(lo, hi);
         let highlight = |j: usize| m[j] <= 0.0 && fg[j] >= min_de && profile[j][0] > colour[0];
@@ -404,6 +399,14 @@ fn across_highlights(
     }
 }
 
+/// The mean of Lab `samples` (at least one).
+fn mean_lab(samples: &[[f32; 3]]) -> [f32; 3] {
+    let n = samples.len() as f32;
+    samples.iter().fold([0.0f32; 3], |acc, s| {
+        [acc[0] + s[0] / n, acc[1] + s[1] / n, acc[2] + s[2] / n]
+    })
+}
+
 /// Widest core of an outlined cable, nominal widths ([`across_outline`]).
 const OUTLINE_MAX_CORE: f32 = 1.5;
 
@@ -423,12 +426,7 @@ fn across_outline(
     centre: usize,
     settings: Profiles,
 ) -> (usize, usize) {
-    let mean = |a: usize, b: usize| {
-        let n = (b - a + 1) as f32;
-        profile[a..=b].iter().fold([0.0f32; 3], |acc, s| {
-            [acc[0] + s[0] / n, acc[1] + s[1] / n, acc[2] + s[2] / n]
-        })
-    };
+    let mean = |a: usize, b: usize| mean_lab(&profile[a..=b]);
     let max_core = (settings.max_core / settings.step).round() as usize;
     let colour = mean(lo, hi);
     let width = hi - lo + 1;
