@@ -34,6 +34,14 @@ pub fn polyline_length(line: &[[f32; 2]]) -> f32 {
     line.windows(2).map(|w| dist(w[0], w[1])).sum()
 }
 
+/// How many points of `line` lie within `tolerance` of a point of `other` (both
+/// sampled densely: a point between two of `other`'s is not near either).
+pub fn points_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> usize {
+    line.iter()
+        .filter(|&&p| other.iter().any(|&q| dist(p, q) <= tolerance))
+        .count()
+}
+
 /// Unit heading of a path: from the last point at least `span` pixels back (or the
 /// first point) to the newest point; `[1, 0]` for a path too short to have one.
 pub fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {

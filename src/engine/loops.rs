@@ -15,7 +15,7 @@ use super::Params;
 use super::cable::{Fitted, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
-use super::geometry::{dist, polyline_length};
+use super::geometry::{dist, points_near, polyline_length};
 use super::graph::Graph;
 use super::orphans::search;
 use super::spline::resample;
@@ -288,11 +288,7 @@ fn arc_lengths(line: &[[f32; 2]]) -> Vec<f32> {
 
 /// Share of the points of `line` within `tolerance` of a point of `other`.
 fn share_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> f32 {
-    let near = line
-        .iter()
-        .filter(|&&q| other.iter().any(|&o| dist(q, o) <= tolerance))
-        .count();
-    near as f32 / line.len().max(1) as f32
+    points_near(line, other, tolerance) as f32 / line.len().max(1) as f32
 }
 
 /// `cable` run round `course`: its polyline to the later of where the loop leaves and
