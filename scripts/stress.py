@@ -6,9 +6,11 @@ white among them) that cross, run out of the frame at both ends, or end in view 
 metal terminal; shaded (a darker rim, a lighter core), 7-11 px wide at 640x480, smooth
 (bends no tighter than about 40 px); and two kinds on any of those backgrounds: thin
 rods 3-5 px wide with blunt ends (`thin`), pairs of same-colour cables lying side by
-side, 0-4 px apart (`pairs`), and cables that loop over themselves once (`loops`, a loop
-30-70 px in radius). One folder per kind, so that `ariadne eval --dataset DIR`
-reports each kind on its own row:
+side, 0-4 px apart (`pairs`), cables that loop over themselves once (`loops`, a loop
+30-70 px in radius), and one or two power cables 14-22 px wide among 2-4 wires 5-8 px
+wide (`mixed`); and cables casting soft shadows on textured surfaces (`textured`: a
+cutting mat's grid, perforated metal, cork or granite, planks, twill, tiles). One
+folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its own row:
 
     training/.venv/bin/python scripts/stress.py /tmp/stress
     target/release/ariadne eval --dataset /tmp/stress --endpoints detect
@@ -40,9 +42,15 @@ BACKGROUNDS = {
     "black": [(22, 22, 25), (38, 36, 34)],
     "saturated": [(170, 40, 40), (40, 120, 60), (30, 40, 90), (220, 200, 60), (230, 130, 40)],
 }
-# One folder each: the background kinds, then thin rods and same-colour pairs on any of
-# them (appended, so the scenes of the first four stay as they were).
-KINDS = list(BACKGROUNDS) + ["thin", "pairs", "loops"]
+# One folder each: the background kinds, then thin rods, same-colour pairs, loops,
+# textured surfaces and mixed widths (each appended, so the scenes before it stay as
+# they were).
+KINDS = list(BACKGROUNDS) + ["thin", "pairs", "loops", "textured", "mixed"]
+# The `textured` kind's surfaces: a cutting mat's grid, perforated metal, cork or granite
+# speckle, wooden planks, twill fabric, tiles with grout. Drawn here with their own
+# rules, not those of training/scenes.py, so the kind tests more than the training
+# scenes' textures.
+TEXTURES = ["mat", "perforated", "speckle", "planks", "twill", "tiles"]
 CABLE_COLOURS = [
     (220, 220, 215),  # white
     (35, 35, 38),  # black
@@ -152,6 +160,78 @@ def background(rng, kind):
     return Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
 
 
+def textured_background(rng):
+    """One of `TEXTURES`, under the same uneven light and sensor noise as `background`."""
+    kind = TEXTURES[rng.integers(len(TEXTURES))]
+    yy, xx = np.mgrid[0:H, 0:W].astype(float)
+    if kind == "mat":  # a coloured mat, light grid lines, every fifth bolder
+        base = np.array([(40, 110, 70), (40, 60, 110), (60, 62, 66)][rng.integers(3)], float)
+        img = np.ones((H, W, 3)) * base
+        pitch = rng.uniform(12.0, 20.0)
+        line = base * 0.4 + 150.0
+        for axis in (xx, yy):
+            k = axis / pitch
+            near = np.abs(k - np.round(k)) * pitch
+            bold = np.round(k) % 5 == 0
+            on = (near < 0.6) | (bold & (near < 1.2))
+            img[on] = line
+    elif kind == "perforated":  # bright metal, a staggered grid of dark holes
+        img = np.ones((H, W, 3)) * rng.uniform(140.0, 200.0) * rng.uniform(0.95, 1.05, 3)
+        img += np.cumsum(rng.normal(0.0, 1.0, (H, W)), axis=1)[..., None] * 0.15
+        pitch, radius = rng.uniform(10.0, 18.0), rng.uniform(2.0, 3.5)
+        row = np.round(yy / pitch)
+        dx = xx - (np.round(xx / pitch - (row % 2) * 0.5) + (row % 2) * 0.5) * pitch
+        img[np.hypot(dx, yy - row * pitch) < radius] = 30.0
+    elif kind == "speckle":  # cork or granite: dense small flecks of related colours
+        bases = [(180, 140, 95), (120, 120, 118), (200, 195, 185), (60, 58, 55)]
+        base = np.array(bases[rng.integers(4)], float)
+        img = np.ones((H, W, 3)) * base
+        for shade in rng.uniform(0.55, 1.4, 3):
+            flecks = rng.random((H // 2, W // 2)) < rng.uniform(0.05, 0.2)
+            big = np.kron(flecks, np.ones((2, 2), bool))
+            img[big] = np.clip(base * shade, 0, 255)
+    elif kind == "planks":  # wood grain along one axis, dark seams between planks
+        base = np.array([(190, 145, 95), (150, 100, 60), (215, 185, 140)][rng.integers(3)], float)
+        along, across = (xx, yy) if rng.random() < 0.5 else (yy, xx)
+        width = rng.uniform(60.0, 130.0)
+        plank = np.floor(across / width)
+        warp = np.sin(along / rng.uniform(40.0, 90.0) + plank * 1.7) * rng.uniform(2.0, 6.0)
+        grain = np.sin((across + warp) * rng.uniform(0.4, 1.2) + plank * 2.3)
+        img = base * (1.0 + 0.08 * grain[..., None] + 0.06 * np.sin(plank * 3.1)[..., None])
+        img[np.abs(across - np.round(across / width) * width) < 1.2] = base * 0.35
+    elif kind == "twill":  # diagonal ribs of a woven cloth
+        bases = [(40, 50, 90), (110, 110, 115), (150, 40, 45), (200, 190, 170)]
+        base = np.array(bases[rng.integers(4)], float)
+        pitch = rng.uniform(3.0, 6.0)
+        ribs = np.sin((xx + yy) * math.pi / pitch) * np.sin((xx - 2 * yy) * math.pi / (3 * pitch))
+        img = base * (1.0 + 0.18 * ribs[..., None])
+    else:  # tiles: squares of two close colours, grey grout
+        base = np.array([(225, 225, 220), (60, 90, 140), (170, 80, 60)][rng.integers(3)], float)
+        size = rng.uniform(40.0, 80.0)
+        check = ((np.floor(xx / size) + np.floor(yy / size)) % 2)[..., None]
+        img = base * (1.0 - 0.08 * check)
+        grout = np.zeros((H, W), bool)
+        for axis in (xx, yy):
+            grout |= np.abs(axis - np.round(axis / size) * size) < 1.5
+        img[grout] = (128.0, 125.0, 120.0)
+    g = 1.0 + 0.12 * ((xx / W - 0.5) * rng.uniform(-1, 1) + (yy / H - 0.5) * rng.uniform(-1, 1))
+    img = img * g[:, :, None] + rng.normal(0.0, 3.0, (H, W, 3))
+    return Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
+
+
+def cast_shadows(img, paths, widths, rng):
+    """Darkens `img` under each path moved 2-4 px down and right, blurred: the soft
+    shadow a cable casts on a flat surface lit from above and to one side."""
+    shade = Image.new("L", (W, H), 0)
+    d = ImageDraw.Draw(shade)
+    off = rng.uniform(2.0, 4.0, 2)
+    for path, width in zip(paths, widths):
+        d.line([tuple(p + off) for p in path], fill=255, width=int(round(width + 2)), joint="curve")
+    s = np.asarray(shade.filter(ImageFilter.GaussianBlur(2.5)), float)[..., None] / 255.0
+    dark = np.asarray(img, float) * (1.0 - rng.uniform(0.3, 0.5) * s)
+    return Image.fromarray(np.clip(dark, 0, 255).astype(np.uint8))
+
+
 def rim_of(colour):
     """The darker colour of a cable's or rod's rim."""
     return tuple(int(c * 0.55) for c in colour)
@@ -205,13 +285,18 @@ def parallel(path, offset):
 def scene(rng, kind):
     """A photo of `kind` and its centrelines with their mask widths: a background kind
     with cables 7-11 px wide; `thin`, rods 3-5 px wide; `pairs`, one or two pairs of
-    same-colour cables side by side (0-4 px apart) among others. The last three on any
-    background kind. Masks are the dataset's 7 px strokes, but a rod's is as wide as the
-    rod: a 7 px stroke would be wider than the object."""
+    same-colour cables side by side (0-4 px apart) among others; `loops`, cables that
+    loop over themselves; `mixed`, power cables 14-22 px wide among wires 5-8 px wide.
+    Those four on any background kind; `textured` has its own surfaces
+    (`textured_scene`). Masks are the dataset's 7 px strokes (a power cable's too: the
+    dataset draws one width for every cable), but a rod's is as wide as the rod: a 7 px
+    stroke would be wider than the object."""
+    lines = []
+    if kind == "textured":
+        return textured_scene(rng)
     backdrop = kind if kind in BACKGROUNDS else list(BACKGROUNDS)[rng.integers(len(BACKGROUNDS))]
     img = background(rng, backdrop)
     draw = ImageDraw.Draw(img)
-    lines = []
     if kind == "pairs":
         for _ in range(int(rng.integers(1, 3))):
             path = through_cable(rng) if rng.random() < 0.5 else cable_in_view(rng)
@@ -222,13 +307,29 @@ def scene(rng, kind):
                 if len(line) > 100:
                     draw_cable(draw, line, colour, width)
                     lines.append((line, MASK_WIDTH))
+    if kind == "mixed":
+        for _ in range(int(rng.integers(1, 3))):
+            path = any_cable(rng)
+            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+            draw_cable(draw, path, colour, rng.uniform(14.0, 22.0))
+            lines.append((path, MASK_WIDTH))
+        for _ in range(int(rng.integers(2, 5))):
+            path = any_cable(rng)
+            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+            draw_cable(draw, path, colour, rng.uniform(5.0, 8.0))
+            lines.append((path, MASK_WIDTH))
     if kind == "loops":
         for _ in range(int(rng.integers(1, 3))):
             path = loop_cable(rng)
             colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
             draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
             lines.append((path, MASK_WIDTH))
-    extra = rng.integers(0, 3) if kind in ("pairs", "loops") else rng.integers(2, 6)
+    if kind == "mixed":
+        extra = 0
+    elif kind in ("pairs", "loops"):
+        extra = rng.integers(0, 3)
+    else:
+        extra = rng.integers(2, 6)
     for _ in range(int(extra)):
         path = any_cable(rng)
         colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
@@ -240,6 +341,19 @@ def scene(rng, kind):
             draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
             lines.append((path, MASK_WIDTH))
     return img.filter(ImageFilter.GaussianBlur(0.7)), lines
+
+
+def textured_scene(rng):
+    """A `textured` photo: 2-5 cables 7-11 px wide, each casting a soft shadow, on one of
+    `TEXTURES`."""
+    img = textured_background(rng)
+    paths = [any_cable(rng) for _ in range(int(rng.integers(2, 6)))]
+    widths = [rng.uniform(7.0, 11.0) for _ in paths]
+    img = cast_shadows(img, paths, widths, rng)
+    draw = ImageDraw.Draw(img)
+    for path, width in zip(paths, widths):
+        draw_cable(draw, path, CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))], width)
+    return img.filter(ImageFilter.GaussianBlur(0.7)), [(path, MASK_WIDTH) for path in paths]
 
 
 def mask(lines):
