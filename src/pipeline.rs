@@ -149,9 +149,32 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         .width_correction(&frame, job.params)
         .map(|c| (k * c).clamp(MIN_CORRECTION, MAX_CORRECTION))
         .filter(|&next| next != k);
+    // At the scale one kind of cable asks for, another may be lost (a power cable
+    // among signal wires): the first pass's cables that this scale does not suit are
+    // taken in. Shrunk for wide cables, the masks keep the first pass's width: the
+    // thin cables set the scene's scale, the wide ones are wide cables.
+    let mut mixed_mask_scale = None;
     if let Some(next) = corrected {
+        let shrinks = next < k;
         k = next;
-        (pass, frame) = again(&pass, k, false)?;
+        let (second, at) = again(&pass, k, false)?;
+        let earlier = std::mem::replace(&mut pass, second);
+        frame = at;
+        let scale = earlier.segmentation.working_scale;
+        let Ends {
+            points,
+            confidences,
+        } = &mut pass.ends;
+        let taken = pass.segmentation.adopt_lost(
+            points,
+            confidences,
+            earlier.segmentation,
+            (&earlier.ends.points, &earlier.ends.confidences),
+            job.params,
+        );
+        if taken > 0 && shrinks {
+            mixed_mask_scale = Some(pass.segmentation.working_scale / scale);
+        }
     }
     // Masks as wide as the cables read. Wide cables read sub-linearly, so shrunk
     // photos' cables still read wider than nominal: their masks follow whatever is left,
@@ -159,7 +182,9 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     // scale masks follow only a width off by more than `mask_width_tolerance` (README,
     // "Any camera").
     let (params, found) = (job.params, &pass.segmentation);
-    let mask_scale = if k < 1.0 {
+    let mask_scale = if let Some(scale) = mixed_mask_scale {
+        scale
+    } else if k < 1.0 {
         found.mask_correction(&frame, params, 1.0).max(1.0)
     } else if k > 1.0 {
         1.0

@@ -270,11 +270,15 @@ pub enum Case {
     /// a shallow angle (about 25°): at the crossing the way on is straighter than the
     /// way into the loop.
     Curl,
+    /// A power cable 22 px wide across two wires 5 px wide, all ends in view: the
+    /// cable reads wide and the photo is segmented again smaller for it, where the
+    /// wires are under 3 px.
+    Mixed,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 11] = [
+    pub const ALL: [Case; 12] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -286,13 +290,16 @@ impl Case {
         Case::Twins,
         Case::TwinsNoEndInView,
         Case::Curl,
+        Case::Mixed,
     ];
 
-    /// Width of the case's cables, pixels.
-    fn cable_width(self) -> f32 {
+    /// Width of the case's `k`-th cable, pixels.
+    fn cable_width(self, k: usize) -> f32 {
         match self {
             Case::SideBySideThin => 8.0,
             Case::Twins | Case::TwinsNoEndInView => 9.0,
+            Case::Mixed if k == 0 => 16.0,
+            Case::Mixed => 5.0,
             _ => 11.0,
         }
     }
@@ -318,7 +325,7 @@ fn alongside(line: &[[f32; 2]], offset: f32) -> Vec<[f32; 2]> {
 /// terminals beyond every end inside the frame, on a noisy plain background.
 pub fn case(case: Case) -> Scene {
     let (w, h) = (640u32, 480u32);
-    let width = case.cable_width();
+    let width = case.cable_width(0);
     let line = |f: &dyn Fn(f32) -> [f32; 2], n: usize| -> Vec<[f32; 2]> {
         (0..=n).map(|i| f(i as f32 / n as f32)).collect()
     };
@@ -423,6 +430,24 @@ pub fn case(case: Case) -> Scene {
                 ),
             ],
         ),
+        Case::Mixed => (
+            // The power cable sags across the lower half; the wires cross it.
+            [222, 220, 214],
+            vec![
+                (
+                    line(&arc(60.0, 330.0, 580.0, 300.0, 0.12), 600),
+                    [35, 35, 38],
+                ),
+                (
+                    line(&arc(90.0, 90.0, 520.0, 420.0, -0.1), 600),
+                    [200, 30, 30],
+                ),
+                (
+                    line(&arc(560.0, 80.0, 250.0, 440.0, 0.1), 500),
+                    [30, 60, 190],
+                ),
+            ],
+        ),
         Case::Crossing => (
             // Straight-ish cables through (320, 240), 60° apart.
             [224, 222, 216],
@@ -445,7 +470,8 @@ pub fn case(case: Case) -> Scene {
     });
     let mut mask = GrayImage::new(w, h);
     let mut out = Vec::new();
-    for (centreline, color) in cables {
+    for (k, (centreline, color)) in cables.into_iter().enumerate() {
+        let width = case.cable_width(k);
         let rim = color.map(|c| (c as f32 * 0.55) as u8);
         let core = color.map(|c| (c as f32 * 1.25 + 25.0).min(255.0) as u8);
         for (stroke_width, colour) in [(width, rim), (width - 3.0, color), (3.0, core)] {

@@ -237,3 +237,30 @@ pub(super) fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
     }
     channels.map(|mut ch| median(&mut ch, u8::cmp).unwrap_or(0))
 }
+
+/// A straight cable from `ends[0]` to `ends[1]` (eleven points, 8 px wide, score 0.5),
+/// for the engine's unit tests.
+#[cfg(test)]
+pub(super) fn straight(id: usize, ends: [[f32; 2]; 2], end_indices: [Option<usize>; 2]) -> Cable {
+    Cable {
+        id,
+        ends,
+        end_indices,
+        spline: BSpline {
+            degree: 3,
+            knots: Vec::new(),
+            control_points: Vec::new(),
+        },
+        polyline: (0..=10)
+            .map(|i| {
+                let t = i as f32 / 10.0;
+                [0, 1].map(|j| ends[0][j] + t * (ends[1][j] - ends[0][j]))
+            })
+            .collect(),
+        length_px: dist(ends[0], ends[1]),
+        width_px: 8.0,
+        color: [0, 0, 0],
+        ridge_share: 1.0,
+        score: 0.5,
+    }
+}

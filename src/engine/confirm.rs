@@ -76,31 +76,7 @@ impl Segmentation {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::spline::BSpline;
-
-    fn cable(id: usize, ends: [[f32; 2]; 2], end_indices: [Option<usize>; 2]) -> Cable {
-        Cable {
-            id,
-            ends,
-            end_indices,
-            spline: BSpline {
-                degree: 3,
-                knots: Vec::new(),
-                control_points: Vec::new(),
-            },
-            polyline: (0..=10)
-                .map(|i| {
-                    let t = i as f32 / 10.0;
-                    [0, 1].map(|j| ends[0][j] + t * (ends[1][j] - ends[0][j]))
-                })
-                .collect(),
-            length_px: dist(ends[0], ends[1]),
-            width_px: 8.0,
-            color: [0, 0, 0],
-            ridge_share: 1.0,
-            score: 0.5,
-        }
-    }
+    use crate::engine::cable::straight as cable;
 
     #[test]
     fn a_free_end_inside_the_frame_takes_the_nearest_weak_peak() {

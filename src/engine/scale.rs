@@ -15,7 +15,7 @@ use std::cmp::Ordering;
 
 use image::{RgbImage, imageops};
 
-use super::geometry::polyline_length;
+use super::geometry::{dist, polyline_length};
 use super::{CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
@@ -52,6 +52,16 @@ const SEEN_SHARE: f32 = 0.02;
 pub fn field_may_miss_wide_cables(full: &CableField) -> bool {
     full.cable_share(FIELD_CABLE_LEVEL) < SEEN_SHARE
 }
+
+/// Share of a cable's centreline points near the cables of a pass at another working
+/// scale from which that pass is taken to have found it ([`Segmentation::adopt_lost`]).
+const EXPLAINED_SHARE: f32 = 0.5;
+
+/// Shortest cable, in nominal widths at its own pass's scale, that
+/// [`Segmentation::adopt_lost`] takes in: the first pass, at a scale that does not
+/// suit every cable, also finds short pieces of the wide ones (along an edge, across a
+/// highlight).
+const ADOPT_MIN_LENGTH: f32 = 20.0;
 
 /// Relative size changes smaller than this are not worth a resampling.
 const SAME_SIZE: f64 = 0.05;
@@ -274,6 +284,84 @@ impl Segmentation {
     pub fn mask_width(&self, mask_width_px: f32) -> f32 {
         mask_width_px * self.mask_scale / self.working_scale
     }
+
+    /// Takes in the cables of `earlier`, a pass over the same photo at another working
+    /// scale (both in the photo's pixels), that this pass lost because its scale does
+    /// not suit them: a power cable beside signal wires reads wide and the photo is
+    /// segmented again smaller for it, where the wires are too thin to follow; or the
+    /// wires decide, the photo is enlarged, and the power cable is too wide there.
+    /// A cable of `earlier` is taken when its width at this scale is off
+    /// `nominal_width_px` by more than `width_tolerance`, it is at least
+    /// [`ADOPT_MIN_LENGTH`] nominal widths long at its own scale, and fewer than
+    /// [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within half their
+    /// width plus its own). Its ends come along: an end of this pass within the cable's
+    /// width of one of its ends is that end (the caller's ends are the same in both
+    /// passes), unless a cable of this pass ends there already, and then the cable is
+    /// not taken; a detected end of `earlier` with no such match is appended to
+    /// `points` and `confidences` (this pass's ends, aligned with `end_cables`).
+    /// Returns how many cables were taken.
+    pub fn adopt_lost(
+        &mut self,
+        points: &mut Vec<[f64; 2]>,
+        confidences: &mut Vec<f32>,
+        earlier: Segmentation,
+        earlier_ends: (&[[f64; 2]], &[f32]),
+        params: &Params,
+    ) -> usize {
+        let own = self.cables.len();
+        let min_length = ADOPT_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
+        let mut taken = 0;
+        for mut cable in earlier.cables {
+            let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
+            if !off_by_more(ratio, params.width_tolerance) || cable.length_px < min_length {
+                continue;
+            }
+            let near = cable
+                .polyline
+                .iter()
+                .filter(|&&p| {
+                    self.cables[..own].iter().any(|c| {
+                        let reach = c.width_px / 2.0 + cable.width_px;
+                        c.polyline.iter().any(|&q| dist(p, q) <= reach)
+                    })
+                })
+                .count();
+            if near as f32 >= EXPLAINED_SHARE * cable.polyline.len() as f32 {
+                continue;
+            }
+            let same = |i: usize| {
+                let q = earlier_ends.0[i].map(|v| v as f32);
+                points
+                    .iter()
+                    .position(|p| dist(p.map(|v| v as f32), q) <= cable.width_px)
+            };
+            let matched = cable.end_indices.map(|i| i.map(|i| (i, same(i))));
+            if matched
+                .iter()
+                .flatten()
+                .any(|&(_, j)| j.is_some_and(|j| self.end_cables[j].is_some()))
+            {
+                continue;
+            }
+            cable.id = self.cables.len();
+            for (index, m) in cable.end_indices.iter_mut().zip(matched) {
+                *index = m.map(|(i, j)| {
+                    j.unwrap_or_else(|| {
+                        points.push(earlier_ends.0[i]);
+                        confidences.push(earlier_ends.1[i]);
+                        self.end_cables.push(None);
+                        points.len() - 1
+                    })
+                });
+                if let Some(j) = *index {
+                    self.end_cables[j] = Some(cable.id);
+                }
+            }
+            self.cables.push(cable);
+            taken += 1;
+        }
+        taken
+    }
 }
 
 /// True when the cables look too wide for the network at the working size: its field
@@ -343,6 +431,98 @@ fn measured_width(readings: Vec<Reading>, nominal: f32) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::Cable;
+    use crate::engine::cable::straight;
+
+    /// A segmentation at `working_scale` of `cables` and its `end_cables`.
+    fn found(
+        working_scale: f32,
+        cables: Vec<Cable>,
+        end_cables: Vec<Option<usize>>,
+    ) -> Segmentation {
+        Segmentation {
+            width: 640,
+            height: 480,
+            cables,
+            end_cables,
+            superpixels: 0,
+            working_scale,
+            mask_scale: 1.0,
+            timings: Default::default(),
+        }
+    }
+
+    /// [`straight`] `width_px` wide.
+    fn wide(
+        id: usize,
+        ends: [[f32; 2]; 2],
+        end_indices: [Option<usize>; 2],
+        width_px: f32,
+    ) -> Cable {
+        Cable {
+            width_px,
+            ..straight(id, ends, end_indices)
+        }
+    }
+
+    #[test]
+    fn cables_the_second_pass_s_scale_does_not_suit_are_taken_in_with_their_ends() {
+        // The second pass, shrunk by half for a 20 px power cable, found it alone.
+        let mut seg = found(
+            0.5,
+            vec![wide(
+                0,
+                [[100.0, 400.0], [540.0, 400.0]],
+                [Some(0), Some(1)],
+                20.0,
+            )],
+            vec![Some(0), Some(0), None],
+        );
+        let mut points = vec![[100.0, 400.0], [540.0, 400.0], [300.0, 100.0]];
+        let mut confidences = vec![0.9, 0.9, 0.4];
+        let earlier = found(
+            1.0,
+            vec![
+                // A piece along the power cable: explained by it.
+                wide(0, [[120.0, 402.0], [500.0, 402.0]], [None, None], 8.0),
+                // A wire from this pass's free end 2 down to the power cable: taken.
+                wide(1, [[300.0, 100.0], [300.0, 380.0]], [Some(0), None], 4.0),
+                // A wire whose ends this pass has not: taken, its ends appended.
+                wide(2, [[50.0, 50.0], [250.0, 60.0]], [Some(1), Some(2)], 4.0),
+                // Too short to be more than a piece of something wider.
+                wide(3, [[500.0, 100.0], [560.0, 100.0]], [None, None], 4.0),
+                // Ends where the power cable ends: that end is taken.
+                wide(4, [[101.0, 399.0], [100.0, 150.0]], [Some(3), None], 4.0),
+                // As wide as the second pass's scale suits: it would have found it.
+                wide(5, [[50.0, 200.0], [400.0, 250.0]], [None, None], 16.0),
+            ],
+            Vec::new(),
+        );
+        let earlier_points = [[300.0, 101.0], [50.0, 50.0], [250.0, 60.0], [101.0, 399.0]];
+        let earlier_confidences = [0.5, 0.6, 0.7, 0.8];
+        let taken = seg.adopt_lost(
+            &mut points,
+            &mut confidences,
+            earlier,
+            (&earlier_points, &earlier_confidences),
+            &Params::default(),
+        );
+        assert_eq!(taken, 2);
+        assert_eq!(seg.cables.len(), 3);
+        assert_eq!(seg.cables[1].ends[0], [300.0, 100.0]);
+        assert_eq!(seg.cables[1].end_indices, [Some(2), None]);
+        assert_eq!(seg.cables[2].end_indices, [Some(3), Some(4)]);
+        assert_eq!(
+            seg.cables.iter().map(|c| c.id).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
+        assert_eq!(
+            seg.end_cables,
+            [Some(0), Some(0), Some(1), Some(2), Some(2)]
+        );
+        assert_eq!(points[3..], [[50.0, 50.0], [250.0, 60.0]]);
+        assert_eq!(confidences, [0.9, 0.9, 0.4, 0.6, 0.7]);
+    }
 
     /// Readings of `(width, length, score)`.
     fn readings(cables: &[(f32, f32, f32)]) -> Vec<Reading> {
