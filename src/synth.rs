@@ -270,9 +270,9 @@ pub enum Case {
     /// a shallow angle (about 25°): at the crossing the way on is straighter than the
     /// way into the loop.
     Curl,
-    /// A power cable 22 px wide across two wires 5 px wide, all ends in view: the
-    /// cable reads wide and the photo is segmented again smaller for it, where the
-    /// wires are under 3 px.
+    /// A power cable 16 px wide across two wires 5 px wide, all ends in view: the
+    /// wires read thin and the photo is segmented again enlarged for them, where the
+    /// power cable is too wide to follow (the first pass's is taken in).
     Mixed,
 }
 

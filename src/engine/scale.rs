@@ -491,7 +491,7 @@ mod tests {
                 wide(2, [[50.0, 50.0], [250.0, 60.0]], [Some(1), Some(2)], 4.0),
                 // Too short to be more than a piece of something wider.
                 wide(3, [[500.0, 100.0], [560.0, 100.0]], [None, None], 4.0),
-                // Ends where the power cable ends: that end is taken.
+                // Ends where the power cable ends: that end is the power cable's.
                 wide(4, [[101.0, 399.0], [100.0, 150.0]], [Some(3), None], 4.0),
                 // As wide as the second pass's scale suits: it would have found it.
                 wide(5, [[50.0, 200.0], [400.0, 250.0]], [None, None], 16.0),
