@@ -259,6 +259,16 @@ def draw_rod(draw, path, colour, width):
     draw.line(pts, fill=colour, width=max(1, int(round(width - 2))), joint="curve")
 
 
+def add_cables(rng, draw, lines, count, make_path, widths):
+    """Draws `count` shaded cables along `make_path(rng)`, each of a random colour and a
+    width uniform in `widths`, and adds them to `lines` with the dataset's mask width."""
+    for _ in range(count):
+        path = make_path(rng)
+        colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+        draw_cable(draw, path, colour, rng.uniform(*widths))
+        lines.append((path, MASK_WIDTH))
+
+
 def any_cable(rng):
     """A cable through the frame (35 %), leaving it at one end (25 %) or all in view."""
     r = rng.random()
@@ -308,38 +318,25 @@ def scene(rng, kind):
                     draw_cable(draw, line, colour, width)
                     lines.append((line, MASK_WIDTH))
     if kind == "mixed":
-        for _ in range(int(rng.integers(1, 3))):
-            path = any_cable(rng)
-            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
-            draw_cable(draw, path, colour, rng.uniform(14.0, 22.0))
-            lines.append((path, MASK_WIDTH))
-        for _ in range(int(rng.integers(2, 5))):
-            path = any_cable(rng)
-            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
-            draw_cable(draw, path, colour, rng.uniform(5.0, 8.0))
-            lines.append((path, MASK_WIDTH))
+        add_cables(rng, draw, lines, int(rng.integers(1, 3)), any_cable, (14.0, 22.0))
+        add_cables(rng, draw, lines, int(rng.integers(2, 5)), any_cable, (5.0, 8.0))
     if kind == "loops":
-        for _ in range(int(rng.integers(1, 3))):
-            path = loop_cable(rng)
-            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
-            draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
-            lines.append((path, MASK_WIDTH))
+        add_cables(rng, draw, lines, int(rng.integers(1, 3)), loop_cable, (7.0, 11.0))
     if kind == "mixed":
         extra = 0
     elif kind in ("pairs", "loops"):
         extra = rng.integers(0, 3)
     else:
         extra = rng.integers(2, 6)
-    for _ in range(int(extra)):
-        path = any_cable(rng)
-        colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
-        if kind == "thin":
+    if kind == "thin":
+        for _ in range(int(extra)):
+            path = any_cable(rng)
+            colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
             width = rng.uniform(3.0, 5.0)
             draw_rod(draw, path, colour, width)
             lines.append((path, int(round(width))))
-        else:
-            draw_cable(draw, path, colour, rng.uniform(7.0, 11.0))
-            lines.append((path, MASK_WIDTH))
+    else:
+        add_cables(rng, draw, lines, int(extra), any_cable, (7.0, 11.0))
     return img.filter(ImageFilter.GaussianBlur(0.7)), lines
 
 
