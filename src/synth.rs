@@ -274,11 +274,15 @@ pub enum Case {
     /// wires read thin and the photo is segmented again enlarged for them, where the
     /// power cable is too wide to follow (the first pass's is taken in).
     Mixed,
+    /// A pale grey cable on a white board crossing the frame (no end in view), and a
+    /// dark one with both ends in view: little colour or contrast to walk by, yet the
+    /// network's field sees it whole.
+    PaleNoEndInView,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 12] = [
+    pub const ALL: [Case; 13] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -291,6 +295,7 @@ impl Case {
         Case::TwinsNoEndInView,
         Case::Curl,
         Case::Mixed,
+        Case::PaleNoEndInView,
     ];
 
     /// Width of the case's `k`-th cable, pixels.
@@ -445,6 +450,19 @@ pub fn case(case: Case) -> Scene {
                 (
                     line(&arc(560.0, 80.0, 250.0, 440.0, 0.1), 500),
                     [30, 60, 190],
+                ),
+            ],
+        ),
+        Case::PaleNoEndInView => (
+            [232, 231, 227],
+            vec![
+                (
+                    line(&arc(0.0, 320.0, 639.0, 140.0, -0.12), 800),
+                    [200, 200, 196],
+                ),
+                (
+                    line(&arc(140.0, 90.0, 470.0, 420.0, 0.15), 600),
+                    [40, 40, 44],
                 ),
             ],
         ),

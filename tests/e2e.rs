@@ -63,7 +63,9 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
 /// shallow angle (`Curl`) must be found with its loop. In `Mixed` the two wires set
 /// the scale and the photo is segmented again enlarged, where the power cable is too
 /// wide to follow: it is found only because the first pass's cable is taken in
-/// (`Segmentation::adopt_lost`).
+/// (`Segmentation::adopt_lost`). In `PaleNoEndInView` the pale cable crossing the white
+/// board scores too little by colour and contrast for a cable from border seeds; it is
+/// found only because the field is sure of it (`field_border_sure_level`).
 #[test]
 fn hard_synthetic_cases_are_found_from_a_photo_alone() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)

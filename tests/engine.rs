@@ -275,7 +275,9 @@ fn exact_field(s: &ariadne_dlo::synth::Scene) -> engine::CableField {
 /// In `Curl` the walk crosses the place where the cable crosses itself at a shallow
 /// angle, leaving the loop out; the loop is taken in from the field (`loops`; with it
 /// off this test fails on `Curl`). `CrossingLoop`, left out here until 2026-11-23, is
-/// found whole with or without that rule.
+/// found whole with or without that rule. In `PaleNoEndInView` the pale cable is found
+/// from the border, and walked partly a superpixel beside it: the pieces of field along
+/// it then give it a second time, dropped as repeating it (without that, 3 cables).
 #[test]
 fn an_exact_field_recovers_the_hard_cases() {
     use ariadne_dlo::synth::Case;

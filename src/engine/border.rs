@@ -11,10 +11,10 @@
 use super::cable::{Cable, Scene, model_cable, model_course};
 use super::chains::{chain, extend};
 use super::field::CableField;
-use super::geometry::{along_one_side, dist3, median};
+use super::geometry::{along_one_side, dist3, median, runs_along};
 use super::graph::Graph;
 use super::orphans::orphan_seeds;
-use super::pairing::{self, Pairing};
+use super::pairing::{self, Floor, Pairing};
 use super::superpixels::Superpixels;
 use super::twins::lies_over_twins;
 use super::walk::{self, Seed, Walk, WalkEnd};
@@ -61,7 +61,16 @@ pub(super) fn border_crossing_cables(
         let frame = (sp.step, [sp.width, sp.height]);
         let seeds = orphan_seeds(graph, vertex_field, &covered, frame, p);
         let orphans = cables_from(scene, &seeds, &covered, min_score, true)?;
-        found.cables.extend(orphans.cables);
+        // A pale cable can be walked a superpixel beside it, leaving pieces of field
+        // along it that its walk does not cover: a cable over them repeats it.
+        let repeats = |c: &Cable| {
+            found.cables.iter().any(|f| {
+                let tolerance = 0.5 * f.width_px.max(p.nominal_width_px);
+                runs_along(&c.polyline, &f.polyline, tolerance)
+            })
+        };
+        let new: Vec<Cable> = orphans.cables.into_iter().filter(|c| !repeats(c)).collect();
+        found.cables.extend(new);
     }
     Ok(found.cables)
 }
@@ -91,7 +100,8 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
-/// uncovered superpixels, score at least `min_score`, read as a ridge rather than a
+/// uncovered superpixels, score at least `min_score` (with a field, a walk along which
+/// it is sure, `field_border_sure_level`, only the floor of any cable), read as a ridge rather than a
 /// step between two backgrounds across at least `min_ridge_share` of their profiles,
 /// and do not lie all along one side of the frame, within `border_margin_px` of it: the
 /// frame cuts whatever runs there (a board's edge, a tray's rim, a strip of table), so
@@ -140,12 +150,22 @@ fn cables_from(
     };
     let confidence = vec![p.border_seed_confidence; seeds.len()];
     // Only such walks were kept, so every pairing ends on the border or a seed. These
-    // seeds' floor rises above any cable's; a hypothesis below it could only have
-    // claimed ends from others below it, so dropping it in the pairing keeps the rest.
-    let floor = min_score.max(p.cable_score_floor(terrain.field.is_some()));
+    // seeds' floor rises above any cable's, but a walk the field is sure of needs only
+    // what an end's cable needs; a hypothesis below its floor could only have claimed
+    // ends from others below it, so dropping it in the pairing keeps the rest.
+    let field = terrain.field.is_some();
+    let floor = min_score.max(p.cable_score_floor(field));
+    let sure = field.then_some((p.field_border_sure_level, p.cable_score_floor(field)));
     // Walks from the border are not joined where they leave it again (no field given),
     // and these seeds are no cable's ends, so a cable may run on behind them.
-    let picked = pairing::pair(&crossing, &confidence, p, floor, 1.0, None);
+    let picked = pairing::pair(
+        &crossing,
+        &confidence,
+        p,
+        Floor { score: floor, sure },
+        1.0,
+        None,
+    );
     let seed_scene = Scene {
         walks: &crossing,
         seeds,

@@ -42,6 +42,16 @@ pub fn points_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> usi
         .count()
 }
 
+/// Least share of a centreline's points near another's for it to run along it.
+const REPEAT_SHARE: f32 = 0.5;
+
+/// Whether at least [`REPEAT_SHARE`] of the points of `line` lie within `tolerance`
+/// of a point of `other` (both sampled densely): a cable over `line` repeats the one
+/// over `other`.
+pub fn runs_along(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> bool {
+    points_near(line, other, tolerance) as f32 >= REPEAT_SHARE * line.len() as f32
+}
+
 /// Unit heading of a path: from the last point at least `span` pixels back (or the
 /// first point) to the newest point; `[1, 0]` for a path too short to have one.
 pub fn heading(points: &[[f32; 2]], span: f32) -> [f32; 2] {

@@ -256,7 +256,7 @@ pub fn segment_oversegmented(
         &walks,
         confidence,
         params,
-        params.cable_score_floor(field.is_some()),
+        pairing::Floor::new(params.cable_score_floor(field.is_some())),
         params.field_through_factor,
         field,
     );

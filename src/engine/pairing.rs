@@ -49,11 +49,37 @@ pub struct Pairing {
     pub score: f32,
 }
 
+/// The lowest score a hypothesis may have to be accepted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Floor {
+    /// For every hypothesis ([`Params::cable_score_floor`]).
+    pub score: f32,
+    /// For one walk alone (none joined) along which the cable field's mean is at least
+    /// `.0`: `.1` instead.
+    pub sure: Option<(f32, f32)>,
+}
+
+impl Floor {
+    /// `score` for every hypothesis.
+    pub fn new(score: f32) -> Self {
+        Self { score, sure: None }
+    }
+
+    /// The lowest score for `h`, a hypothesis over `walks`.
+    fn of(&self, h: &Pairing, walks: &[Walk]) -> f32 {
+        match self.sure {
+            Some((level, score)) if h.joined.is_none() && walks[h.walk].cable >= level => {
+                score.min(self.score)
+            }
+            _ => self.score,
+        }
+    }
+}
+
 /// Pairs the ends using `walks` (see module docs); `confidence` holds one value in
 /// 0..=1 per end (1 for ends given by a caller, the detector's score otherwise). A cable
 /// that no second end confirms rests on its start end alone, so its score is scaled by
-/// that end's confidence. Hypotheses scoring below `min_score` are dropped
-/// ([`Params::cable_score_floor`]). Walks that leave the frame are joined only where
+/// that end's confidence. Hypotheses scoring below `floor` are dropped. Walks that leave the frame are joined only where
 /// `field` shows the cable between them. A walk along a cable that runs on behind its
 /// end ([`Walk::through`]) follows a cable passing the end, not the end's own, and its
 /// score is multiplied by `through_factor` (1 where the seeds are no cable's ends).
@@ -64,7 +90,7 @@ pub fn pair(
     walks: &[Walk],
     confidence: &[f32],
     params: &Params,
-    min_score: f32,
+    floor: Floor,
     through_factor: f32,
     field: Option<&CableField>,
 ) -> Vec<Pairing> {
@@ -98,7 +124,7 @@ pub fn pair(
         })
         .collect();
     hypotheses.extend(joins(walks, confidence, params, field, &passing));
-    hypotheses.retain(|h| h.score >= min_score);
+    hypotheses.retain(|h| h.score >= floor.of(h, walks));
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
     let mut taken = vec![false; vertex_count(walks)];
@@ -253,7 +279,14 @@ mod tests {
             })
             .max()
             .map_or(0, |s| s + 1);
-        pair(walks, &vec![1.0; seeds], p, p.min_cable_score, 1.0, None)
+        pair(
+            walks,
+            &vec![1.0; seeds],
+            p,
+            Floor::new(p.min_cable_score),
+            1.0,
+            None,
+        )
     }
 
     #[test]
@@ -335,15 +368,18 @@ mod tests {
                 .collect(),
             orientation: vec![[1.0, 0.0]; 200],
         };
+        let pair_over = |field| {
+            pair(
+                &walks,
+                &[1.0; 2],
+                &p,
+                Floor::new(p.min_cable_score),
+                1.0,
+                field,
+            )
+        };
         let grazing = field(0.9);
-        let got = pair(
-            &walks,
-            &[1.0; 2],
-            &p,
-            p.min_cable_score,
-            1.0,
-            Some(&grazing),
-        );
+        let got = pair_over(Some(&grazing));
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         assert_eq!(got[0].score, walks[0].quality(&p));
@@ -351,7 +387,7 @@ mod tests {
         // cables, each through the border.
         let left = field(0.0);
         for field in [Some(&left), None] {
-            let got = pair(&walks, &[1.0; 2], &p, p.min_cable_score, 1.0, field);
+            let got = pair_over(field);
             assert_eq!(got.len(), 2);
             assert!(got.iter().all(|h| h.far == FarEnd::Border));
         }
@@ -366,7 +402,17 @@ mod tests {
         passing.through = true;
         let own = walk(0, WalkEnd::Border, 0.7);
         let walks = [passing, own];
-        let kept = |factor| pair(&walks, &[1.0], &p, p.min_cable_score, factor, None)[0].walk;
+        let kept = |factor| {
+            pair(
+                &walks,
+                &[1.0],
+                &p,
+                Floor::new(p.min_cable_score),
+                factor,
+                None,
+            )[0]
+            .walk
+        };
         assert_eq!(kept(p.field_through_factor), 1);
         assert_eq!(kept(1.0), 0);
     }
@@ -388,10 +434,46 @@ mod tests {
         // A lost walk scoring midway between the two floors.
         let score = 0.5 * (p.field_min_cable_score + p.min_cable_score);
         let weak = [walk(0, WalkEnd::Lost, (score / p.lost_factor).powi(2))];
-        let kept = |field| pair(&weak, &[1.0], &p, p.cable_score_floor(field), 1.0, None).len();
+        let kept = |field| {
+            pair(
+                &weak,
+                &[1.0],
+                &p,
+                Floor::new(p.cable_score_floor(field)),
+                1.0,
+                None,
+            )
+            .len()
+        };
         assert!(p.field_min_cable_score < p.min_cable_score);
         assert_eq!(kept(true), 1);
         assert_eq!(kept(false), 0);
+    }
+
+    #[test]
+    fn a_walk_the_field_is_sure_of_needs_only_the_sure_floor() {
+        let p = Params::default();
+        let (level, low) = (p.field_border_sure_level, p.field_min_cable_score);
+        let floor = Floor {
+            score: p.field_border_min_score,
+            sure: Some((level, low)),
+        };
+        // A walk leaving the frame with the field's mean `cable` along it, its lateral
+        // contrast set so that it scores midway between the two floors.
+        let score = 0.5 * (low + p.field_border_min_score);
+        let kept = |cable: f32| {
+            let mut w = walk(0, WalkEnd::Border, 1.0);
+            w.cable = cable;
+            let rest = p.border_factor * cable.powf(p.quality_field_exponent);
+            w.contrast = (score / rest).powf(1.0 / p.quality_contrast_exponent);
+            pair(&[w], &[1.0], &p, floor, 1.0, None).len()
+        };
+        assert_eq!(kept(level), 1);
+        assert_eq!(kept(0.95 * level), 0);
+        // With no such rule, the walk the field is sure of is dropped too.
+        let mut w = walk(0, WalkEnd::Border, 1.0);
+        w.contrast = (score / p.border_factor).powf(1.0 / p.quality_contrast_exponent);
+        assert!(pair(&[w], &[1.0], &p, Floor::new(floor.score), 1.0, None).is_empty());
     }
 
     #[test]
@@ -410,7 +492,7 @@ mod tests {
             &walks,
             &[1.0, weak, 0.4, 0.4],
             &p,
-            p.min_cable_score,
+            Floor::new(p.min_cable_score),
             1.0,
             None,
         );

@@ -26,7 +26,7 @@ use super::Cable;
 use super::Params;
 use super::cable::median_rgb;
 use super::color::LabImage;
-use super::geometry::{dist, dist3, median, points_near, polyline_length};
+use super::geometry::{dist, dist3, median, polyline_length, runs_along};
 use super::refine::{normals, read_across, smooth_offsets};
 use super::spline::BSpline;
 
@@ -137,16 +137,6 @@ pub(super) fn split_twins(
             cable
         })
         .collect();
-}
-
-/// Least share of a twin's centreline within the tolerance of another cable's for the
-/// twin to be that cable.
-const REPEAT_SHARE: f32 = 0.5;
-
-/// Whether at least [`REPEAT_SHARE`] of the points of `line` lie within `tolerance`
-/// of a point of `other` (both sampled densely).
-fn runs_along(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> bool {
-    points_near(line, other, tolerance) as f32 >= REPEAT_SHARE * line.len() as f32
 }
 
 /// Whether `cable` lies over twins ([`split_twins`] would split it): across such a pair

@@ -322,6 +322,13 @@ pub struct Params {
     /// `border_min_score` when the field is used (its share already weeds out walks
     /// over the background, and lowers the scores it keeps).
     pub field_border_min_score: f32,
+    /// Mean cable probability along a walk from a border or piece seed from which the
+    /// field is taken to be sure of it: such a walk needs only the score an end's cable
+    /// needs (`field_min_cable_score`), not `field_border_min_score`. A pale cable on a
+    /// pale board crossing the frame has little colour likelihood and lateral contrast
+    /// to score by, yet the field sees it whole (README, "How the engine uses the
+    /// field"). 1: no such rule (the field never reaches 1).
+    pub field_border_sure_level: f32,
     /// `min_cable_score` when the field is used: its share in every score keeps walks
     /// over the background out, so weaker cables (a pale cable on a pale card, whose
     /// lateral contrast is low) can be kept.
@@ -436,6 +443,7 @@ impl Default for Params {
             field_level: 0.3,
             field_min_share: 0.15,
             field_border_min_score: 0.12,
+            field_border_sure_level: 0.7,
             field_min_cable_score: 0.03,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
