@@ -417,6 +417,57 @@ fn a_strip_along_the_frame_edge_is_not_a_cable() {
     assert!(err.iter().all(|&e| e < 3.0), "{err:?}");
 }
 
+/// A board's edge whose two corners were taken for terminals is not a cable: the walk
+/// between the two false ends follows the edge, which the refinement reads as a step
+/// between the board and the table below it, not a ridge (`ended_min_ridge_share`;
+/// with it at 0 the edge is reported). The scene's cables, from their true ends, are.
+#[test]
+fn a_board_edge_between_two_false_ends_is_not_a_cable() {
+    let mut s = ariadne_dlo::synth::case(ariadne_dlo::synth::Case::SideBySide);
+    let (w, h) = s.image.dimensions();
+    // The board's edge face, 4 px of mid-grey, then the dark table.
+    let edge = 440;
+    for y in edge..h {
+        let colour = if y < edge + 4 {
+            [150, 145, 140]
+        } else {
+            [70, 60, 55]
+        };
+        for x in 0..w {
+            s.image.put_pixel(x, y, image::Rgb(colour));
+        }
+    }
+    // The field calls the edge's cells fair cable, as a network might.
+    let mut field = exact_field(&s);
+    let row = edge as usize / 8 * field.width;
+    for cell in &mut field.cable[row + 6..row + field.width - 6] {
+        *cell = 0.6;
+    }
+    let mut ends = s.terminals();
+    ends.extend([
+        [60.0, f64::from(edge) + 2.0],
+        [580.0, f64::from(edge) + 2.0],
+    ]);
+    let found = |params: &Params| {
+        let seg = engine::segment_with_confidence(
+            &s.image,
+            &ends,
+            &vec![1.0; ends.len()],
+            Some(&field),
+            params,
+            engine::Deadline::NONE,
+        )
+        .unwrap();
+        seg.cables.len()
+    };
+    assert_eq!(found(&Params::default()), s.cables.len());
+    let keep_edges = Params {
+        ended_min_ridge_share: 0.0,
+        ..Params::default()
+    };
+    assert_eq!(found(&keep_edges), s.cables.len() + 1);
+}
+
 /// Two cables of one colour laid together (`Twins`: a pixel apart) are one band to the
 /// field and to the superpixels, and the network reports one end at each end of the
 /// pair. The walk between those ends runs down the band's middle; the profiles across

@@ -278,6 +278,12 @@ pub fn segment_oversegmented(
         let Some(mut cable) = cable::model_cable(&scene, choice) else {
             continue;
         };
+        // An edge between two backgrounds, its corners taken for terminals.
+        if cable.ridge_share < params.ended_min_ridge_share
+            && !twins::lies_over_twins(&cable, &lab, image, params)
+        {
+            continue;
+        }
         cable.id = cables.len();
         for i in cable.end_indices.into_iter().flatten() {
             end_cables[i] = Some(cable.id);

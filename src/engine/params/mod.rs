@@ -264,6 +264,12 @@ pub struct Params {
     /// backgrounds (`refine::Refined::ridge_share`): the edge of a board or tray is
     /// long, straight and unexplained, and a field may call it cable (0 keeps them).
     pub min_ridge_share: f32,
+    /// The same for a cable walked from its ends, lower: the ends are evidence of their
+    /// own, and a true cable beside another reads a step on more of its profiles. A
+    /// board's or sheet's edge whose corners were taken for terminals reads a step
+    /// nearly all along (simple/00012: a ridge on none of its profiles); cables lying
+    /// over twins are kept (0 keeps them all; only with `refine`, which reads them).
+    pub ended_min_ridge_share: f32,
 
     // --- the cable field (a network's cable probability and direction) ---
     /// Trust the cable field when one is given: it joins the step score, stops walks
@@ -428,6 +434,7 @@ impl Default for Params {
             border_min_steps: 5.0,
             border_max_covered: 0.25,
             min_ridge_share: 0.5,
+            ended_min_ridge_share: 0.25,
             use_field: true,
             lateral_contrast: true,
             field_floor: 0.1,

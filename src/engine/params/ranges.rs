@@ -99,6 +99,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("border_min_steps", 0.0, 1000.0),
     ("border_max_covered", 0.0, 1.0),
     ("min_ridge_share", 0.0, 1.0),
+    ("ended_min_ridge_share", 0.0, 1.0),
     ("field_floor", 0.0, 1.0),
     ("field_alignment_weight", 0.0, 1.0),
     ("field_min_cable", 0.0, 1.0),
