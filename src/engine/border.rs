@@ -101,12 +101,12 @@ struct SeedCables {
 
 /// The cables walked from `seeds` that reach the border or another seed over mostly
 /// uncovered superpixels, score at least `min_score` (with a field, a walk along which
-/// it is sure, `field_border_sure_level`, only the floor of any cable), read as a ridge rather than a
-/// step between two backgrounds across at least `min_ridge_share` of their profiles,
-/// and do not lie all along one side of the frame, within `border_margin_px` of it: the
-/// frame cuts whatever runs there (a board's edge, a tray's rim, a strip of table), so
-/// its profiles cannot be read, and a cable that close along a whole side would be
-/// mostly out of view.
+/// it is sure, `field_border_sure_level`, only the floor of any cable), read as a ridge
+/// rather than a step between two backgrounds across at least `min_ridge_share` of
+/// their profiles, and do not lie all along one side of the frame, within
+/// `border_margin_px` of it: the frame cuts whatever runs there (a board's edge, a
+/// tray's rim, a strip of table), so its profiles cannot be read, and a cable that
+/// close along a whole side would be mostly out of view.
 /// With `chained`, the seeds are no cable's ends (the ends of the field's pieces): the
 /// cables found are chained through them into whole ones ([`chain`]) and, with
 /// `field_orphan_run_on`, run on past them where a walk lost the cable further on

@@ -79,10 +79,11 @@ impl Floor {
 /// Pairs the ends using `walks` (see module docs); `confidence` holds one value in
 /// 0..=1 per end (1 for ends given by a caller, the detector's score otherwise). A cable
 /// that no second end confirms rests on its start end alone, so its score is scaled by
-/// that end's confidence. Hypotheses scoring below `floor` are dropped. Walks that leave the frame are joined only where
-/// `field` shows the cable between them. A walk along a cable that runs on behind its
-/// end ([`Walk::through`]) follows a cable passing the end, not the end's own, and its
-/// score is multiplied by `through_factor` (1 where the seeds are no cable's ends).
+/// that end's confidence. Hypotheses scoring below `floor` are dropped. Walks that
+/// leave the frame are joined only where `field` shows the cable between them. A walk
+/// along a cable that runs on behind its end ([`Walk::through`]) follows a cable
+/// passing the end, not the end's own, and its score is multiplied by
+/// `through_factor` (1 where the seeds are no cable's ends).
 /// A hypothesis whose walks run more than `pair_max_shared` of their superpixels over
 /// those of hypotheses accepted before it repeats a cable already found and is
 /// dropped. The result is ordered by decreasing score.
