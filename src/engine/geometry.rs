@@ -37,8 +37,18 @@ pub fn polyline_length(line: &[[f32; 2]]) -> f32 {
 /// How many points of `line` lie within `tolerance` of a point of `other` (both
 /// sampled densely: a point between two of `other`'s is not near either).
 pub fn points_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> usize {
+    points_near_any(line, &[(other, tolerance)])
+}
+
+/// How many points of `line` lie near any of `others`: within its tolerance of one of
+/// its points (each line with its own, all sampled densely).
+pub fn points_near_any(line: &[[f32; 2]], others: &[(&[[f32; 2]], f32)]) -> usize {
     line.iter()
-        .filter(|&&p| other.iter().any(|&q| dist(p, q) <= tolerance))
+        .filter(|&&p| {
+            others
+                .iter()
+                .any(|&(other, tolerance)| other.iter().any(|&q| dist(p, q) <= tolerance))
+        })
         .count()
 }
 

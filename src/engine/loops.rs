@@ -15,7 +15,7 @@ use super::Params;
 use super::cable::{Fitted, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
-use super::geometry::{dist, points_near, polyline_length};
+use super::geometry::{dist, points_near, points_near_any, polyline_length};
 use super::graph::Graph;
 use super::orphans::search;
 use super::spline::resample;
@@ -93,18 +93,11 @@ pub(super) fn close_loops(
             let other = &cables[j];
             share_near(&other.polyline, &dense, tolerance(other)) >= 1.0 - OWN_SHARE
         });
-        let on_others = dense
+        let crossing: Vec<(&[[f32; 2]], f32)> = crossing
             .iter()
-            .filter(|&&q| {
-                crossing.iter().any(|&j| {
-                    let other = &cables[j];
-                    other
-                        .polyline
-                        .iter()
-                        .any(|&o| dist(q, o) <= tolerance(other))
-                })
-            })
-            .count();
+            .map(|&j| (&cables[j].polyline[..], tolerance(&cables[j])))
+            .collect();
+        let on_others = points_near_any(&dense, &crossing);
         let owned = on_others as f32 > ALONG_SHARE * dense.len() as f32;
         if owned {
             continue;

@@ -15,7 +15,7 @@ use std::cmp::Ordering;
 
 use image::{RgbImage, imageops};
 
-use super::geometry::{dist, polyline_length};
+use super::geometry::{dist, points_near_any, polyline_length};
 use super::{CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
@@ -316,16 +316,11 @@ impl Segmentation {
             if !off_by_more(ratio, params.width_tolerance) || cable.length_px < min_length {
                 continue;
             }
-            let near = cable
-                .polyline
+            let found: Vec<(&[[f32; 2]], f32)> = self.cables[..own]
                 .iter()
-                .filter(|&&p| {
-                    self.cables[..own].iter().any(|c| {
-                        let reach = c.width_px / 2.0 + cable.width_px;
-                        c.polyline.iter().any(|&q| dist(p, q) <= reach)
-                    })
-                })
-                .count();
+                .map(|c| (&c.polyline[..], c.width_px / 2.0 + cable.width_px))
+                .collect();
+            let near = points_near_any(&cable.polyline, &found);
             if near as f32 >= EXPLAINED_SHARE * cable.polyline.len() as f32 {
                 continue;
             }
