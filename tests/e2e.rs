@@ -9,6 +9,7 @@ mod common;
 use std::sync::Arc;
 
 use ariadne_dlo::detect::{DetectorConfig, OnnxDetector};
+use ariadne_dlo::engine::geometry::points_near;
 use ariadne_dlo::engine::{Params, render};
 use ariadne_dlo::synth::{self, Case};
 use ariadne_dlo::{eval, pipeline};
@@ -131,13 +132,5 @@ fn covered_share(scene: &synth::Scene, out: &pipeline::Output, within: f32) -> f
         .iter()
         .flat_map(|c| c.centreline.iter().copied())
         .collect();
-    let near = truth
-        .iter()
-        .filter(|p| {
-            found
-                .iter()
-                .any(|q| (q[0] - p[0]).hypot(q[1] - p[1]) <= within)
-        })
-        .count();
-    near as f32 / truth.len().max(1) as f32
+    points_near(&truth, &found, within) as f32 / truth.len().max(1) as f32
 }

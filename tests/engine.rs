@@ -326,13 +326,23 @@ fn with_field(
     ends: &[[f64; 2]],
     field: &engine::CableField,
 ) -> (usize, Vec<f32>) {
+    with_field_and(s, ends, field, &Params::default())
+}
+
+/// [`with_field`] with the given `params`.
+fn with_field_and(
+    s: &ariadne_dlo::synth::Scene,
+    ends: &[[f64; 2]],
+    field: &engine::CableField,
+    params: &Params,
+) -> (usize, Vec<f32>) {
     let confidences = vec![1.0; ends.len()];
     let seg = engine::segment_with_confidence(
         &s.image,
         ends,
         &confidences,
         Some(field),
-        &Params::default(),
+        params,
         engine::Deadline::NONE,
     )
     .unwrap();
@@ -448,18 +458,7 @@ fn a_board_edge_between_two_false_ends_is_not_a_cable() {
         [60.0, f64::from(edge) + 2.0],
         [580.0, f64::from(edge) + 2.0],
     ]);
-    let found = |params: &Params| {
-        let seg = engine::segment_with_confidence(
-            &s.image,
-            &ends,
-            &vec![1.0; ends.len()],
-            Some(&field),
-            params,
-            engine::Deadline::NONE,
-        )
-        .unwrap();
-        seg.cables.len()
-    };
+    let found = |params: &Params| with_field_and(&s, &ends, &field, params).0;
     assert_eq!(found(&Params::default()), s.cables.len());
     let keep_edges = Params {
         ended_min_ridge_share: 0.0,
