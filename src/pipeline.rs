@@ -335,6 +335,11 @@ impl Pass {
             (Some(points), _) => Ends::given(points),
             (None, seen) => {
                 let mut ends = ends;
+                // One terminal peak for two twins' terminals: the second is an end too.
+                for (point, beside) in segmentation.twin_ends() {
+                    ends.points.push(point);
+                    ends.confidences.push(ends.confidences[beside]);
+                }
                 // Weaker terminal peaks where a cable stops are its ends too.
                 let candidates = seen.map(|s| s.candidates).unwrap_or_default();
                 let points: Vec<[f64; 2]> = candidates.iter().map(|d| d.point).collect();

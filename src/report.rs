@@ -25,7 +25,9 @@ pub struct SegmentResponse {
     /// Cables found, by decreasing score.
     pub cables: Vec<CableReport>,
     /// Every end: given, or found (the network's terminal peaks the walks started from,
-    /// then weaker peaks where a found cable stops), with the cable it was assigned to.
+    /// then the second terminal beside one of them where a cable walked from it lay over
+    /// two cables side by side, then weaker peaks where a found cable stops), with the
+    /// cable it was assigned to.
     pub endpoints: Vec<EndpointReport>,
     /// The mask as a base64-encoded PNG of the image's size.
     pub mask_png: String,

@@ -66,7 +66,10 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
 /// wide to follow: it is found only because the first pass's cable is taken in
 /// (`Segmentation::adopt_lost`). In `PaleNoEndInView` the pale cable crossing the white
 /// board scores too little by colour and contrast for a cable from border seeds; it is
-/// found only because the field is sure of it (`field_border_sure_level`).
+/// found only because the field is sure of it (`field_border_sure_level`). Every
+/// terminal must be among the ends (within the evaluation's 15 px): in `Twins` the
+/// network sees one peak for the two terminals at each end of the band, and the second
+/// is the end of the second twin (`Segmentation::twin_ends`).
 #[test]
 fn hard_synthetic_cases_are_found_from_a_photo_alone() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)
@@ -96,15 +99,26 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
             .collect();
         let (matched, _) = eval::match_cables(&found, &truth, eval::MATCH_IOU);
         let covered = covered_share(&scene, &out, COVERED_PX);
+        let terminals = scene.terminals();
+        let ends = eval::match_points(&out.ends.points, &terminals, eval::TERMINAL_MATCH_PX);
         eprintln!(
             "{case:?}: {} found, {matched} of {} matched, {covered:.3} of the centrelines \
-             covered, ends {:?}",
+             covered, {ends} of {} terminals among the ends {:?}",
             found.len(),
             truth.len(),
+            terminals.len(),
             out.ends.points
         );
         assert_eq!(matched, truth.len(), "{case:?}: a true cable was missed");
         assert_eq!(found.len(), truth.len(), "{case:?}: extra cables");
+        // The terminal against the other cable's side is a known miss (README,
+        // Accuracy): the network's peak there is too weak to report.
+        let known_misses = usize::from(case == Case::TerminalAgainstCable);
+        assert!(
+            ends + known_misses >= terminals.len(),
+            "{case:?}: {ends} of {} terminals among the ends",
+            terminals.len()
+        );
         if case == Case::Curl {
             // Matched by IoU even with its loop left out (0.55-0.58 of it covered then).
             assert!(

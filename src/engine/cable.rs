@@ -25,6 +25,10 @@ pub struct Cable {
     /// For each of `ends`, the index of the given end it is, or `None` where the cable
     /// leaves the frame or was lost.
     pub end_indices: [Option<usize>; 2],
+    /// For the second of two twins split from one cable (`twins`), the ends its sibling
+    /// holds at each of its sides: one terminal peak stood for both twins' terminals
+    /// there ([`Segmentation::twin_ends`](super::Segmentation::twin_ends)).
+    pub twin_ends: [Option<usize>; 2],
     /// The centreline model.
     pub spline: BSpline,
     /// Dense samples of the spline from `ends[0]` to `ends[1]`.
@@ -144,6 +148,7 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
         id: 0,
         ends: [polyline[0], polyline[polyline.len() - 1]],
         end_indices: [start_seed, far_index],
+        twin_ends: [None, None],
         color: median_rgb(image, &polyline),
         spline,
         polyline,
@@ -246,6 +251,7 @@ pub(super) fn straight(id: usize, ends: [[f32; 2]; 2], end_indices: [Option<usiz
         id,
         ends,
         end_indices,
+        twin_ends: [None, None],
         spline: BSpline {
             degree: 3,
             knots: Vec::new(),

@@ -71,6 +71,29 @@ impl Segmentation {
         }
         taken
     }
+
+    /// Reports the ends of twins beside given ends: where a cable walked from an end
+    /// lay over two alike cables side by side (`twins`), the network saw one terminal
+    /// peak for their two terminals, and the second twin's end on that side is the
+    /// other terminal. Each such end that is no end yet becomes a new end, numbered
+    /// after the existing ones in the order returned, and is recorded in
+    /// [`Segmentation::end_cables`] and its cable's `end_indices`. Returns each new
+    /// end's point (pixels of this segmentation) with the end it lies beside.
+    pub fn twin_ends(&mut self) -> Vec<([f64; 2], usize)> {
+        let mut added = Vec::new();
+        for cable in &mut self.cables {
+            for k in 0..2 {
+                let Some(beside) = cable.twin_ends[k].filter(|_| cable.end_indices[k].is_none())
+                else {
+                    continue;
+                };
+                cable.end_indices[k] = Some(self.end_cables.len());
+                self.end_cables.push(Some(cable.id));
+                added.push((cable.ends[k].map(f64::from), beside));
+            }
+        }
+        added
+    }
 }
 
 #[cfg(test)]
@@ -118,5 +141,31 @@ mod tests {
         // A confirmed end takes no other peak, and a reach of 0 takes none.
         assert!(seg.confirm_ends(&[[302.0, 200.0]], 12.0, 12.0).is_empty());
         assert!(seg.confirm_ends(&[[20.0, 440.0]], 0.0, 12.0).is_empty());
+    }
+
+    #[test]
+    fn the_second_twin_takes_the_terminal_beside_its_siblings_end() {
+        // Twins 0 and 1 split from a cable walked from end 0 to end 1; twin 1's start
+        // already holds an end (a peak of its own), its far end does not.
+        let mut twin = cable(1, [[100.0, 110.0], [300.0, 110.0]], [Some(2), None]);
+        twin.twin_ends = [Some(0), Some(1)];
+        let mut seg = Segmentation {
+            width: 640,
+            height: 480,
+            cables: vec![
+                cable(0, [[100.0, 100.0], [300.0, 100.0]], [Some(0), Some(1)]),
+                twin,
+            ],
+            end_cables: vec![Some(0), Some(0), Some(1)],
+            superpixels: 0,
+            working_scale: 1.0,
+            mask_scale: 1.0,
+            timings: Default::default(),
+        };
+        assert_eq!(seg.twin_ends(), vec![([300.0, 110.0], 1)]);
+        assert_eq!(seg.end_cables[3..], [Some(1)]);
+        assert_eq!(seg.cables[1].end_indices, [Some(2), Some(3)]);
+        // Each is reported once.
+        assert!(seg.twin_ends().is_empty());
     }
 }

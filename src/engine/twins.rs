@@ -208,6 +208,7 @@ fn twin_cables(
         beside(cable, &points, width, image, params)
     });
     let mut far = far?;
+    far.twin_ends = far.end_indices;
     far.end_indices = [None, None];
     Some([near?, far])
 }
