@@ -397,4 +397,37 @@ mod tests {
         let plain = profile(&[], TABLE, reach);
         assert_eq!(read_twins(&plain, 7.8, 0.5), None);
     }
+
+    #[test]
+    fn twins_a_shade_apart_read_at_the_default_cost_and_one_cable_does_not() {
+        // Two cables of one colour 2 px apart, one a shade darker (a pair's colours differ
+        // by up to a tenth): their band matches itself shifted less well than identical
+        // twins', above the cost of 0.5 that was the default until session 35.
+        let cost = Params::default().twin_max_cost;
+        let reach = REACH * 7.8;
+        const SHADE: [f32; 3] = [40.0, 52.0, 34.0];
+        const DARK_SHADE: [f32; 3] = [25.0, 40.0, 27.0];
+        let pair = profile(
+            &[(-5.0, 8.0, RED, DARK_RED), (5.0, 8.0, SHADE, DARK_SHADE)],
+            TABLE,
+            reach,
+        );
+        let t = read_twins(&pair, 7.8, cost).unwrap().expect("twins");
+        assert!(
+            (t.offsets[0] + 5.0).abs() <= 1.0 && (t.offsets[1] - 5.0).abs() <= 1.0,
+            "{t:?}"
+        );
+        assert_eq!(read_twins(&pair, 7.8, 0.5), Some(None));
+        for one in [
+            profile(&[(0.0, 10.0, RED, DARK_RED)], TABLE, reach),
+            profile(&[(0.0, 16.0, RED, DARK_RED)], TABLE, reach),
+            profile(
+                &[(0.0, 3.0, TABLE, TABLE), (0.0, 11.0, INK, INK)],
+                TABLE,
+                reach,
+            ),
+        ] {
+            assert_eq!(read_twins(&one, 7.8, cost), Some(None));
+        }
+    }
 }
