@@ -67,7 +67,8 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
 /// (`Segmentation::adopt_lost`). In `PaleNoEndInView` the pale cable crossing the white
 /// board scores too little by colour and contrast for a cable from border seeds; it is
 /// found only because the field is sure of it (`field_border_sure_level`). Every
-/// terminal must be among the ends (within the evaluation's 15 px): in `Twins` the
+/// terminal must be among the ends (within the evaluation's 15 px), but for the one
+/// `TerminalAgainstCable` presses against another cable: in `Twins` the
 /// network sees one peak for the two terminals at each end of the band, and the second
 /// is the end of the second twin (`Segmentation::twin_ends`).
 #[test]
@@ -111,8 +112,9 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
         );
         assert_eq!(matched, truth.len(), "{case:?}: a true cable was missed");
         assert_eq!(found.len(), truth.len(), "{case:?}: extra cables");
-        // The terminal against the other cable's side is a known miss (README,
-        // Accuracy): the network's peak there is too weak to report.
+        // The terminal pressed against the other cable's side is a known miss (README,
+        // How the engine uses the field, "The second twin's terminal"): the network
+        // reports no end there.
         let known_misses = usize::from(case == Case::TerminalAgainstCable);
         assert!(
             ends + known_misses >= terminals.len(),

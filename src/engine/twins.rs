@@ -400,9 +400,9 @@ mod tests {
 
     #[test]
     fn twins_a_shade_apart_read_at_the_default_cost_and_one_cable_does_not() {
-        // Two cables of one colour 2 px apart, one a shade darker (a pair's colours differ
-        // by up to a tenth): their band matches itself shifted less well than identical
-        // twins', above the cost of 0.5 that was the default until session 35.
+        // Two cables of one colour 2 px apart, one a shade darker (uneven light, or
+        // wear): their band matches itself shifted less well than identical twins' does,
+        // above the former default cost of 0.5.
         let cost = Params::default().twin_max_cost;
         let reach = REACH * 7.8;
         const SHADE: [f32; 3] = [40.0, 52.0, 34.0];
