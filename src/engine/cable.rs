@@ -243,6 +243,26 @@ pub(super) fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
     channels.map(|mut ch| median(&mut ch, u8::cmp).unwrap_or(0))
 }
 
+/// A 640x480 segmentation at `working_scale` of `cables` and its `end_cables`, for the
+/// engine's unit tests.
+#[cfg(test)]
+pub(super) fn found(
+    working_scale: f32,
+    cables: Vec<Cable>,
+    end_cables: Vec<Option<usize>>,
+) -> super::Segmentation {
+    super::Segmentation {
+        width: 640,
+        height: 480,
+        cables,
+        end_cables,
+        superpixels: 0,
+        working_scale,
+        mask_scale: 1.0,
+        timings: Default::default(),
+    }
+}
+
 /// A straight cable from `ends[0]` to `ends[1]` (eleven points, 8 px wide, score 0.5),
 /// for the engine's unit tests.
 #[cfg(test)]

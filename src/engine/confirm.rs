@@ -98,31 +98,25 @@ impl Segmentation {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::engine::cable::straight as cable;
+    use crate::engine::cable::{found, straight as cable};
 
     #[test]
     fn a_free_end_inside_the_frame_takes_the_nearest_weak_peak() {
-        let mut seg = Segmentation {
-            width: 640,
-            height: 480,
-            // Cable 0 runs from given end 0 to a free end at (300, 200); cable 1 from
-            // given end 1 out of the frame at (0, 240); cable 2 from a free end at
-            // (400, 300), where it passes under cable 3, to given end 2; cable 4 from
-            // given end 5 to a free end 20 px from the frame's left side.
-            cables: vec![
+        // Cable 0 runs from given end 0 to a free end at (300, 200); cable 1 from
+        // given end 1 out of the frame at (0, 240); cable 2 from a free end at
+        // (400, 300), where it passes under cable 3, to given end 2; cable 4 from
+        // given end 5 to a free end 20 px from the frame's left side.
+        let mut seg = found(
+            1.0,
+            vec![
                 cable(0, [[100.0, 100.0], [300.0, 200.0]], [Some(0), None]),
                 cable(1, [[200.0, 240.0], [0.0, 240.0]], [Some(1), None]),
                 cable(2, [[400.0, 300.0], [400.0, 400.0]], [None, Some(2)]),
                 cable(3, [[350.0, 296.0], [450.0, 296.0]], [Some(3), Some(4)]),
                 cable(4, [[100.0, 440.0], [20.0, 440.0]], [Some(5), None]),
             ],
-            end_cables: vec![Some(0), Some(1), Some(2), Some(3), Some(3), Some(4)],
-            superpixels: 0,
-            working_scale: 1.0,
-            mask_scale: 1.0,
-            timings: Default::default(),
-        };
+            vec![Some(0), Some(1), Some(2), Some(3), Some(3), Some(4)],
+        );
         let candidates = [
             [309.0, 200.0], // 9 px from cable 0's free end
             [305.0, 203.0], // 5.8 px: the nearer one is taken
@@ -149,19 +143,14 @@ mod tests {
         // already holds an end (a peak of its own), its far end does not.
         let mut twin = cable(1, [[100.0, 110.0], [300.0, 110.0]], [Some(2), None]);
         twin.twin_ends = [Some(0), Some(1)];
-        let mut seg = Segmentation {
-            width: 640,
-            height: 480,
-            cables: vec![
+        let mut seg = found(
+            1.0,
+            vec![
                 cable(0, [[100.0, 100.0], [300.0, 100.0]], [Some(0), Some(1)]),
                 twin,
             ],
-            end_cables: vec![Some(0), Some(0), Some(1)],
-            superpixels: 0,
-            working_scale: 1.0,
-            mask_scale: 1.0,
-            timings: Default::default(),
-        };
+            vec![Some(0), Some(0), Some(1)],
+        );
         assert_eq!(seg.twin_ends(), vec![([300.0, 110.0], 1)]);
         assert_eq!(seg.end_cables[3..], [Some(1)]);
         assert_eq!(seg.cables[1].end_indices, [Some(2), Some(3)]);

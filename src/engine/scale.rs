@@ -427,25 +427,7 @@ fn measured_width(readings: Vec<Reading>, nominal: f32) -> Option<f64> {
 mod tests {
     use super::*;
     use crate::engine::Cable;
-    use crate::engine::cable::straight;
-
-    /// A segmentation at `working_scale` of `cables` and its `end_cables`.
-    fn found(
-        working_scale: f32,
-        cables: Vec<Cable>,
-        end_cables: Vec<Option<usize>>,
-    ) -> Segmentation {
-        Segmentation {
-            width: 640,
-            height: 480,
-            cables,
-            end_cables,
-            superpixels: 0,
-            working_scale,
-            mask_scale: 1.0,
-            timings: Default::default(),
-        }
-    }
+    use crate::engine::cable::{found, straight};
 
     /// [`straight`] `width_px` wide.
     fn wide(
