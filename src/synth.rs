@@ -278,11 +278,15 @@ pub enum Case {
     /// dark one with both ends in view: little colour or contrast to walk by, yet the
     /// network's field sees it whole.
     PaleNoEndInView,
+    /// `Curl` with an orange cable (ends in view) across its loop, 20 px above the
+    /// loop's centre: a chord of it, so the loop leaves and comes back to the orange
+    /// cable too, 80 px apart.
+    LoopCrossedByAnother,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 13] = [
+    pub const ALL: [Case; 14] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -296,6 +300,7 @@ impl Case {
         Case::Curl,
         Case::Mixed,
         Case::PaleNoEndInView,
+        Case::LoopCrossedByAnother,
     ];
 
     /// Width of the case's `k`-th cable, pixels.
@@ -308,6 +313,23 @@ impl Case {
             _ => 11.0,
         }
     }
+}
+
+/// `Curl`'s cable, in 1 px steps: 220 px to the right from (70, 330), a turn of 2π +
+/// 0.45 rad towards the top at 45 px radius (the loop above the line, about
+/// (290, 285)), 220 px on.
+fn curl() -> Vec<[f32; 2]> {
+    let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220.0);
+    let looped = (turn * radius).round() as usize;
+    let mut p = [70.0f32, 330.0];
+    let mut path = vec![p];
+    for i in 0..2 * straight as usize + looped {
+        let along = (i as f32 - straight).clamp(0.0, looped as f32);
+        let heading = -turn * along / looped as f32;
+        p = [p[0] + heading.cos(), p[1] + heading.sin()];
+        path.push(p);
+    }
+    path
 }
 
 /// A cable to draw: centreline and colour.
@@ -395,21 +417,17 @@ pub fn case(case: Case) -> Scene {
             };
             ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
         }
-        Case::Curl => {
-            // 1 px steps: 220 px to the right from (70, 330), a turn of 2π + 0.45 rad
-            // towards the top at 45 px radius (the loop above the line), 220 px on.
-            let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220.0);
-            let looped = (turn * radius).round() as usize;
-            let mut p = [70.0f32, 330.0];
-            let mut path = vec![p];
-            for i in 0..2 * straight as usize + looped {
-                let along = (i as f32 - straight).clamp(0.0, looped as f32);
-                let heading = -turn * along / looped as f32;
-                p = [p[0] + heading.cos(), p[1] + heading.sin()];
-                path.push(p);
-            }
-            ([228, 226, 220], vec![(path, [40, 90, 200])])
-        }
+        Case::Curl => ([228, 226, 220], vec![(curl(), [40, 90, 200])]),
+        Case::LoopCrossedByAnother => (
+            [228, 226, 220],
+            vec![
+                (
+                    line(&arc(60.0, 265.0, 600.0, 265.0, 0.0), 540),
+                    [220, 120, 30],
+                ),
+                (curl(), [40, 90, 200]),
+            ],
+        ),
         Case::CrossingLoop => {
             // The same curve with a = 40, b = 100 over one period about u = 0: it
             // crosses itself at u = ±2.13 (a u = b sin u), at (320, 273), its two

@@ -3,21 +3,26 @@
 //! takes the straighter, across the crossing, and leaves the loop out (found as a
 //! cable of its own from the ends of its unexplained piece of field, or not at all).
 //! The field still shows the loop: a piece of cable that leaves the cable and comes
-//! back to it where it left, with no end on it. Such a piece is walked round (a
-//! breadth-first course over its superpixels from where it leaves the cable to where
-//! it comes back) and spliced into the cable: the cable runs to where the loop leaves
-//! it, round the loop, and on from where the loop comes back, crossing itself there,
-//! and is fitted and refined again. A cable found along the loop alone is that loop,
-//! and is dropped.
+//! back to it where it left, with no end on it. Such a piece is walked round (the
+//! cheapest course over its superpixels from where it leaves the cable to where it
+//! comes back, a superpixel costing more the further its colour is from the cable's,
+//! so that the course keeps to the loop where other cables cross it rather than
+//! taking a short cut along one of them) and spliced into the cable: the cable runs
+//! to where the loop leaves it, round the loop, and on from where the loop comes
+//! back, crossing itself there, and is fitted and refined again. A loop of another
+//! colour is another cable's. A cable found along the loop alone is that loop, and is
+//! dropped.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 use super::Cable;
 use super::Params;
 use super::cable::{Fitted, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
-use super::geometry::{dist, points_near, points_near_any, polyline_length};
+use super::geometry::{dist, dist3, median, points_near, points_near_any, polyline_length};
 use super::graph::Graph;
-use super::orphans::search;
 use super::spline::resample;
 use super::superpixels::Superpixels;
 use super::walk::Seed;
@@ -51,6 +56,22 @@ const ALONG_SHARE: f32 = 0.4;
 /// A cable with at most this share of its length away from the loop is the loop
 /// found on its own.
 const OWN_SHARE: f32 = 0.3;
+/// Largest CIELAB distance between the median colours along a loop's course and along
+/// its cable: a cable's loop is its own colour, while a course of another colour is
+/// another cable's loop or a ring closed by several cables (stress loops: 1-23 for a
+/// cable's own loop, 38-95 for those).
+const MAX_COLOUR_DE: f32 = 30.0;
+/// CIELAB distance from the cable's colour at which a superpixel costs a loop's
+/// course twice as much as one of the cable's colour (the cost grows with its square):
+/// the course goes round the loop rather than along another cable across it.
+const COURSE_DE: f32 = 15.0;
+/// Share of `field_orphan_level` a superpixel's cable probability needs for a loop's
+/// course to cross it (its ends, where it leaves and comes back, need the whole).
+const COURSE_FIELD_SHARE: f32 = 0.6;
+/// A cable found along a loop is the loop found on its own where it lies within this
+/// many of its widths (beyond the half width and half superpixel of the other checks)
+/// of the loop's course: walked along the loop's inner side, a superpixel in.
+const OWN_REACH_WIDTHS: f32 = 0.5;
 
 /// What finding loops reads: the image, its superpixels and graph, the field on
 /// them, the given ends and the parameters.
@@ -91,7 +112,8 @@ pub(super) fn close_loops(
             .collect();
         let (alone, crossing): (Vec<usize>, Vec<usize>) = others.into_iter().partition(|&j| {
             let other = &cables[j];
-            share_near(&other.polyline, &dense, tolerance(other)) >= 1.0 - OWN_SHARE
+            let reach = tolerance(other) + OWN_REACH_WIDTHS * other.width_px;
+            share_near(&other.polyline, &dense, reach) >= 1.0 - OWN_SHARE
         });
         let crossing: Vec<(&[[f32; 2]], f32)> = crossing
             .iter()
@@ -143,11 +165,12 @@ struct LoopCourse {
 }
 
 /// The loop `cable` was walked across, if the field shows one (module docs): the
-/// longest course over superpixels the field calls cable and the cable does not cover,
+/// longest of the cheapest courses ([`cheapest`], [`COURSE_DE`]) over superpixels the
+/// field calls cable ([`COURSE_FIELD_SHARE`]) and the cable does not cover,
 /// between two that touch the cable at most [`MAX_SPAN`] apart along it and
 /// [`END_MARGIN`] from its ends, at least [`MIN_LENGTH`] long, reaching [`MIN_REACH`]
-/// from the crossing, at least [`MIN_ROUNDNESS`] round, all in view and with no given
-/// end on it.
+/// from the crossing, at least [`MIN_ROUNDNESS`] round, all in view, with no given
+/// end on it and of the cable's colour ([`MAX_COLOUR_DE`]).
 fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
     let Ground {
         graph, sp, field, ..
@@ -164,6 +187,11 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
         ground,
     );
     let free = |v: u32| field[v as usize].cable >= p.field_orphan_level && !on[v as usize];
+    // The course may cross fainter field: a loop's tight bend and the places where
+    // other cables cross it read fainter, and colour keeps it on its cable.
+    let faint = |v: u32| {
+        field[v as usize].cable >= COURSE_FIELD_SHARE * p.field_orphan_level && !on[v as usize]
+    };
     let arc = arc_lengths(line);
     let centroid = |v: u32| graph.vertices[v as usize].centroid;
     let along = |q: [f32; 2]| {
@@ -188,13 +216,22 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
             .iter()
             .all(|s| dist(s.point, q) > p.close_radius_px)
     };
-    let mut hops = vec![u32::MAX; graph.len()];
+    // The cable's colour as its superpixels read it (mixed with the background's
+    // where it is thin, as the loop's are).
+    let under: Vec<u32> = line.iter().filter_map(|&q| label_under(sp, q)).collect();
+    let colour = median_lab(graph, &under)?;
+    let unlike = |v: u32| dist3(graph.vertices[v as usize].mean_lab, colour) / COURSE_DE;
+    let step_cost = |v: u32| 1.0 + unlike(v).powi(2);
+    let of_its_colour = |course: &[u32]| {
+        median_lab(graph, course).is_some_and(|c| dist3(c, colour) <= MAX_COLOUR_DE)
+    };
+    let mut cost = vec![f32::INFINITY; graph.len()];
     let mut parent = vec![0; graph.len()];
     let mut best: Option<(f32, LoopCourse)> = None;
     for &(a, sa) in &touching {
-        let order = search(graph, &[a], &free, &mut hops, &mut parent);
+        let order = cheapest(graph, a, &faint, &step_cost, &mut cost, &mut parent);
         for &(b, sb) in &touching {
-            if b == a || hops[b as usize] == u32::MAX || (sa - sb).abs() > MAX_SPAN * nominal {
+            if b == a || cost[b as usize].is_infinite() || (sa - sb).abs() > MAX_SPAN * nominal {
                 continue;
             }
             let mut course = vec![b];
@@ -216,6 +253,7 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
                 || roundness(&points) < MIN_ROUNDNESS
                 || best.as_ref().is_some_and(|(l, _)| *l >= length)
                 || !points.iter().all(|&q| in_view(q) && no_end(q))
+                || !of_its_colour(&course)
             {
                 continue;
             }
@@ -229,10 +267,66 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
             ));
         }
         for &v in &order {
-            hops[v as usize] = u32::MAX;
+            cost[v as usize] = f32::INFINITY;
         }
     }
     best.map(|(_, course)| course)
+}
+
+/// The superpixel under the point `q`, if it lies in the image.
+fn label_under(sp: &Superpixels, q: [f32; 2]) -> Option<u32> {
+    let (x, y) = (q[0].round(), q[1].round());
+    let inside = x >= 0.0 && y >= 0.0 && (x as usize) < sp.width && (y as usize) < sp.height;
+    inside.then(|| sp.labels[y as usize * sp.width + x as usize])
+}
+
+/// Per-channel median of the mean colours of `vertices`.
+fn median_lab(graph: &Graph, vertices: &[u32]) -> Option<[f32; 3]> {
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mut v: Vec<f32> = vertices
+            .iter()
+            .map(|&u| graph.vertices[u as usize].mean_lab[c])
+            .collect();
+        *o = median(&mut v, f32::total_cmp)?;
+    }
+    Some(out)
+}
+
+/// Cheapest courses from `source` over the superpixels `inside` marks, entering each
+/// at `step_cost` (Dijkstra): every one reached, in order, with its cost in `cost`
+/// and the superpixel it was reached from (the source: itself) in `parent`. `cost`
+/// must be infinite wherever this reaches.
+fn cheapest(
+    graph: &Graph,
+    source: u32,
+    inside: &impl Fn(u32) -> bool,
+    step_cost: &impl Fn(u32) -> f32,
+    cost: &mut [f32],
+    parent: &mut [u32],
+) -> Vec<u32> {
+    let mut order = vec![source];
+    cost[source as usize] = 0.0;
+    parent[source as usize] = source;
+    // Costs are never negative, so their bit patterns order as they do.
+    let mut queue = BinaryHeap::from([Reverse((0.0f32.to_bits(), source))]);
+    while let Some(Reverse((bits, v))) = queue.pop() {
+        if bits != cost[v as usize].to_bits() {
+            continue;
+        }
+        for &u in graph.neighbours(v) {
+            let through = f32::from_bits(bits) + step_cost(u);
+            if inside(u) && through < cost[u as usize] {
+                if cost[u as usize].is_infinite() {
+                    order.push(u);
+                }
+                cost[u as usize] = through;
+                parent[u as usize] = v;
+                queue.push(Reverse((through.to_bits(), u)));
+            }
+        }
+    }
+    order
 }
 
 /// For every superpixel, whether its centroid lies within `reach` of `line` (those
@@ -241,11 +335,9 @@ fn covered_by(line: &[[f32; 2]], reach: f32, ground: Ground<'_>) -> Vec<bool> {
     let Ground { graph, sp, .. } = ground;
     let mut on = vec![false; graph.len()];
     for &q in line {
-        let (x, y) = (q[0].round(), q[1].round());
-        if x < 0.0 || y < 0.0 || x as usize >= sp.width || y as usize >= sp.height {
+        let Some(under) = label_under(sp, q) else {
             continue;
-        }
-        let under = sp.labels[y as usize * sp.width + x as usize];
+        };
         for &v in std::iter::once(&under).chain(graph.neighbours(under)) {
             if !on[v as usize] && dist(graph.vertices[v as usize].centroid, q) <= reach {
                 on[v as usize] = true;
