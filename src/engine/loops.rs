@@ -56,10 +56,11 @@ const ALONG_SHARE: f32 = 0.4;
 /// A cable with at most this share of its length away from the loop is the loop
 /// found on its own.
 const OWN_SHARE: f32 = 0.3;
-/// Largest CIELAB distance between the median colours along a loop's course and along
-/// its cable: a cable's loop is its own colour, while a course of another colour is
-/// another cable's loop or a ring closed by several cables (stress loops: 1-23 for a
-/// cable's own loop, 38-95 for those).
+/// Largest CIELAB distance between the median colours of a loop's superpixels and of
+/// its cable's: a cable's loop is its own colour, while a course of another colour is
+/// another cable's loop or a ring closed by several cables (synthetic
+/// `LoopCrossedByAnother` from a photo alone: 8-17 for the blue cable's own loop,
+/// about 100 for the same loop read from the orange cable).
 const MAX_COLOUR_DE: f32 = 30.0;
 /// CIELAB distance from the cable's colour at which a superpixel costs a loop's
 /// course twice as much as one of the cable's colour (the cost grows with its square):
