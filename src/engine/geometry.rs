@@ -93,6 +93,16 @@ pub fn median<T: Copy>(
     Some(*values.select_nth_unstable_by(mid, &mut cmp).1)
 }
 
+/// The per-channel [`median`] of `colours`; `None` when empty.
+pub fn median_colour_of(colours: &[[f32; 3]]) -> Option<[f32; 3]> {
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mut v: Vec<f32> = colours.iter().map(|s| s[c]).collect();
+        *o = median(&mut v, f32::total_cmp)?;
+    }
+    Some(out)
+}
+
 /// Where a ray from `from` along the unit `dir` leaves a `width` x `height` image (the
 /// last pixel centre on each side), if that is within `max_px` and more than half a
 /// pixel away.

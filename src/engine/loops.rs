@@ -21,7 +21,9 @@ use super::Params;
 use super::cable::{Fitted, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
-use super::geometry::{dist, dist3, median, points_near, points_near_any, polyline_length};
+use super::geometry::{
+    dist, dist3, median_colour_of, points_near, points_near_any, polyline_length,
+};
 use super::graph::Graph;
 use super::spline::resample;
 use super::superpixels::Superpixels;
@@ -187,12 +189,13 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
         0.5 * cable.width_px.max(nominal) + 0.5 * sp.step,
         ground,
     );
-    let free = |v: u32| field[v as usize].cable >= p.field_orphan_level && !on[v as usize];
+    let free_at = |v: u32, share: f32| {
+        field[v as usize].cable >= share * p.field_orphan_level && !on[v as usize]
+    };
+    let free = |v: u32| free_at(v, 1.0);
     // The course may cross fainter field: a loop's tight bend and the places where
     // other cables cross it read fainter, and colour keeps it on its cable.
-    let faint = |v: u32| {
-        field[v as usize].cable >= COURSE_FIELD_SHARE * p.field_orphan_level && !on[v as usize]
-    };
+    let faint = |v: u32| free_at(v, COURSE_FIELD_SHARE);
     let arc = arc_lengths(line);
     let centroid = |v: u32| graph.vertices[v as usize].centroid;
     let along = |q: [f32; 2]| {
@@ -283,15 +286,11 @@ fn label_under(sp: &Superpixels, q: [f32; 2]) -> Option<u32> {
 
 /// Per-channel median of the mean colours of `vertices`.
 fn median_lab(graph: &Graph, vertices: &[u32]) -> Option<[f32; 3]> {
-    let mut out = [0.0; 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mut v: Vec<f32> = vertices
-            .iter()
-            .map(|&u| graph.vertices[u as usize].mean_lab[c])
-            .collect();
-        *o = median(&mut v, f32::total_cmp)?;
-    }
-    Some(out)
+    let colours: Vec<[f32; 3]> = vertices
+        .iter()
+        .map(|&u| graph.vertices[u as usize].mean_lab)
+        .collect();
+    median_colour_of(&colours)
 }
 
 /// Cheapest courses from `source` over the superpixels `inside` marks, entering each

@@ -18,7 +18,7 @@
 
 use super::Params;
 use super::color::LabImage;
-use super::geometry::{dist3, median, unit_or};
+use super::geometry::{dist3, median, median_colour_of, unit_or};
 
 /// Result of refining one centreline.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,15 +59,7 @@ pub fn median_colour(lab: &LabImage, line: &[[f32; 2]]) -> Option<[f32; 3]> {
         .iter()
         .filter_map(|p| sample_lab(lab, p[0], p[1]))
         .collect();
-    if samples.is_empty() {
-        return None;
-    }
-    let mut out = [0.0; 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mut v: Vec<f32> = samples.iter().map(|s| s[c]).collect();
-        *o = median(&mut v, f32::total_cmp)?;
-    }
-    Some(out)
+    median_colour_of(&samples)
 }
 
 /// Reads into `profile` the Lab samples across a curve at `p` along its unit normal
