@@ -257,7 +257,10 @@ pub struct Params {
     /// Shortest such cable, in superpixel steps.
     pub border_min_steps: f32,
     /// Largest fraction of such a walk's superpixels that may belong to cables already
-    /// found (a walk along one of them explains nothing new).
+    /// found, or border them (a walk along one of them explains nothing new). Half: a
+    /// cable crossing several found ones touches a few superpixels round each crossing,
+    /// and one whose far part a walk from a stray end found alone (an end read where it
+    /// crosses another cable) runs over that part; with a quarter both were refused.
     pub border_max_covered: f32,
     /// Least share of the profiles across such a cable (one with no given end) that
     /// must read a ridge, a cable on its background, rather than a step between two
@@ -432,7 +435,7 @@ impl Default for Params {
             border_seed_confidence: 0.5,
             border_min_score: 0.35,
             border_min_steps: 5.0,
-            border_max_covered: 0.25,
+            border_max_covered: 0.5,
             min_ridge_share: 0.5,
             ended_min_ridge_share: 0.25,
             use_field: true,
