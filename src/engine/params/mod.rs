@@ -258,9 +258,10 @@ pub struct Params {
     pub border_min_steps: f32,
     /// Largest fraction of such a walk's superpixels that may belong to cables already
     /// found, or border them (a walk along one of them explains nothing new). Half: a
-    /// cable crossing several found ones touches a few superpixels round each crossing,
-    /// and one whose far part a walk from a stray end found alone (an end read where it
-    /// crosses another cable) runs over that part; with a quarter both were refused.
+    /// cable that crosses several found ones touches a few superpixels at each
+    /// crossing, and a cable whose far part was already found from a stray end (an end
+    /// read where it crosses another cable) runs over that part; a quarter refused
+    /// both.
     pub border_max_covered: f32,
     /// Least share of the profiles across such a cable (one with no given end) that
     /// must read a ridge, a cable on its background, rather than a step between two
