@@ -107,6 +107,9 @@ pub fn pair(
         .iter()
         .enumerate()
         .filter(|(_, w)| w.length_px >= params.min_cable_length_px)
+        .filter(|(_, w)| {
+            !matches!(w.end, WalkEnd::Seed(_)) || w.steps() >= params.close_min_steps as usize
+        })
         .map(|(i, w)| {
             let alone = confidence[w.seed];
             let (far, factor) = match w.end {
@@ -251,12 +254,13 @@ fn grazes(field: &CableField, a: [f32; 2], b: [f32; 2], params: &Params) -> bool
 mod tests {
     use super::*;
 
-    /// A walk from `seed` over superpixels of its own.
+    /// A walk from `seed` over superpixels of its own: its seed's, its first and one
+    /// step.
     fn walk(seed: usize, end: WalkEnd, q: f32) -> Walk {
-        let first = 2 * seed as u32;
+        let first = 3 * seed as u32;
         Walk {
             seed,
-            vertices: vec![first, first + 1],
+            vertices: vec![first, first + 1, first + 2],
             end,
             visual: q,
             smoothness: 1.0,
@@ -312,6 +316,29 @@ mod tests {
         }));
         ends.sort_unstable();
         assert_eq!(ends, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn an_end_met_before_the_first_step_is_no_cable() {
+        let p = Params::default();
+        // Ends 0 and 1 face each other across a gap: their walks close on each other
+        // as soon as they leave their own superpixels; each also runs out of the frame.
+        let mut meet = [
+            walk(0, WalkEnd::Seed(1), 0.9),
+            walk(1, WalkEnd::Seed(0), 0.9),
+        ];
+        for w in &mut meet {
+            w.vertices.truncate(2);
+        }
+        let mut walks = meet.to_vec();
+        walks.extend([walk(0, WalkEnd::Border, 0.6), walk(1, WalkEnd::Border, 0.6)]);
+        let got = pair_sure(&walks, &p);
+        assert_eq!(got.len(), 2);
+        assert!(got.iter().all(|h| h.far == FarEnd::Border), "{got:?}");
+        // The paper closes on any end within r.
+        let paper = Params::preset("paper").expect("a preset");
+        let got = pair_sure(&walks, &paper);
+        assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
     }
 
     #[test]

@@ -107,6 +107,11 @@ pub struct Params {
     /// the head): the terminal of a cable laid alongside, within r of the walk's side,
     /// is not where the walk's cable ends (paper: no such limit).
     pub close_max_lateral_steps: f32,
+    /// A walk that closes on another end is a cable only when it took at least this many
+    /// steps past its first superpixel: one that meets an end as soon as it leaves its
+    /// own has read nothing of a cable between the two (the ends of two cables lying
+    /// tip to side; paper: 0).
+    pub close_min_steps: u32,
     /// A walk stops when the best candidate's colour similarity to the walk's colour
     /// model falls below this (histogram intersection, 0..1).
     pub min_similarity: f32,
@@ -389,6 +394,7 @@ impl Default for Params {
             heading_span_px: 25.0,
             close_radius_px: 20.0,
             close_max_lateral_steps: 1.3,
+            close_min_steps: 1,
             min_similarity: 0.1,
             min_contrast: 0.15,
             model_rate: 0.3,
@@ -508,6 +514,7 @@ impl Params {
             mask_width_px: 0.0,
             seed_region_steps: 0.0,
             close_max_lateral_steps: 100.0,
+            close_min_steps: 0,
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
             width_tolerance: 100.0,

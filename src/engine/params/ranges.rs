@@ -54,6 +54,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("heading_span_px", 1.0, 500.0),
     ("close_radius_px", 1.0, 500.0),
     ("close_max_lateral_steps", 0.0, 100.0),
+    ("close_min_steps", 0.0, 100.0),
     ("min_similarity", 0.0, 1.0),
     ("min_contrast", 0.0, 1.0),
     ("model_rate", 0.0, 1.0),

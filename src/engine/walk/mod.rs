@@ -112,6 +112,12 @@ pub struct Walk {
 }
 
 impl Walk {
+    /// How many steps it took past its first superpixel (the first, from the seed,
+    /// only sets its direction and is not scored).
+    pub fn steps(&self) -> usize {
+        self.vertices.len().saturating_sub(2)
+    }
+
     /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b · `cable`^c,
     /// with a = `quality_visual_exponent` (0.5 by default), b =
     /// `quality_contrast_exponent` (2) and c = `quality_field_exponent` (1).
