@@ -86,7 +86,8 @@ impl Floor {
 /// `through_factor` (1 where the seeds are no cable's ends).
 /// A hypothesis whose walks run more than `pair_max_shared` of their superpixels over
 /// those of hypotheses accepted before it repeats a cable already found and is
-/// dropped. The result is ordered by decreasing score.
+/// dropped. A walk that closes on an end after fewer than `close_min_steps` steps
+/// ([`Walk::steps`]) is no hypothesis. The result is ordered by decreasing score.
 pub fn pair(
     walks: &[Walk],
     confidence: &[f32],

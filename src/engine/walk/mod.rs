@@ -112,8 +112,8 @@ pub struct Walk {
 }
 
 impl Walk {
-    /// How many steps it took past its first superpixel (the first, from the seed,
-    /// only sets its direction and is not scored).
+    /// How many steps it took past its first superpixel (the step onto that one, from
+    /// the seed, sets its direction; its colour agreement and turn are not scored).
     pub fn steps(&self) -> usize {
         self.vertices.len().saturating_sub(2)
     }
