@@ -291,13 +291,15 @@ impl Segmentation {
     /// segmented again smaller for it, where the wires are too thin to follow; or the
     /// wires decide, the photo is enlarged, and the power cable is too wide there.
     /// A cable of `earlier` is taken when its width at this scale is off
-    /// `nominal_width_px` by more than `width_tolerance`, it is at least
-    /// [`ADOPT_MIN_LENGTH`] nominal widths long at its own scale, and fewer than
-    /// [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within half their
-    /// width plus its own). Its ends come along: an end of this pass within the cable's
-    /// width of one of its ends is that end (the caller's ends are the same in both
-    /// passes), unless a cable of this pass ends there already, and then the cable is
-    /// not taken; a detected end of `earlier` with no such match is appended to
+    /// `nominal_width_px` by more than `width_tolerance`, or when it starts at an end
+    /// this pass left without a cable (a pale wire that scores under the floor at this
+    /// pass's size: the end is the same one, and the other pass followed it), provided
+    /// it is at least [`ADOPT_MIN_LENGTH`] nominal widths long at its own scale and
+    /// fewer than [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within
+    /// half their width plus its own). Its ends come along: an end of this pass within
+    /// the cable's width of one of its ends is that end (the caller's ends are the same
+    /// in both passes), unless a cable of this pass ends there already, and then the
+    /// cable is not taken; a detected end of `earlier` with no such match is appended to
     /// `points` and `confidences` (this pass's ends, aligned with `end_cables`).
     /// Returns how many cables were taken.
     pub fn adopt_lost(
@@ -312,8 +314,20 @@ impl Segmentation {
         let min_length = ADOPT_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
         let mut taken = 0;
         for mut cable in earlier.cables {
+            let same = |i: usize| {
+                let q = earlier_ends.0[i].map(|v| v as f32);
+                points
+                    .iter()
+                    .position(|p| dist(p.map(|v| v as f32), q) <= cable.width_px)
+            };
+            let matched = cable.end_indices.map(|i| i.map(|i| (i, same(i))));
+            let ends_here = || matched.iter().flatten().filter_map(|&(_, j)| j);
+            if ends_here().any(|j| self.end_cables[j].is_some()) {
+                continue;
+            }
             let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
-            if !off_by_more(ratio, params.width_tolerance) || cable.length_px < min_length {
+            let unsuited = off_by_more(ratio, params.width_tolerance);
+            if !(unsuited || ends_here().next().is_some()) || cable.length_px < min_length {
                 continue;
             }
             let found: Vec<(&[[f32; 2]], f32)> = self.cables[..own]
@@ -322,20 +336,6 @@ impl Segmentation {
                 .collect();
             let near = points_near_any(&cable.polyline, &found);
             if near as f32 >= EXPLAINED_SHARE * cable.polyline.len() as f32 {
-                continue;
-            }
-            let same = |i: usize| {
-                let q = earlier_ends.0[i].map(|v| v as f32);
-                points
-                    .iter()
-                    .position(|p| dist(p.map(|v| v as f32), q) <= cable.width_px)
-            };
-            let matched = cable.end_indices.map(|i| i.map(|i| (i, same(i))));
-            if matched
-                .iter()
-                .flatten()
-                .any(|&(_, j)| j.is_some_and(|j| self.end_cables[j].is_some()))
-            {
                 continue;
             }
             cable.id = self.cables.len();
@@ -442,21 +442,21 @@ mod tests {
         }
     }
 
+    /// A second pass at half the size that found one cable `width_px` wide between its
+    /// ends 0 and 1 and none from its end 2 at `free`: the pass, its ends and their
+    /// confidences.
+    fn second_pass(width_px: f32, free: [f64; 2]) -> (Segmentation, Vec<[f64; 2]>, Vec<f32>) {
+        let ends = [[100.0, 400.0], [540.0, 400.0]];
+        let cable = wide(0, ends, [Some(0), Some(1)], width_px);
+        let seg = found(0.5, vec![cable], vec![Some(0), Some(0), None]);
+        let points = vec![ends[0].map(f64::from), ends[1].map(f64::from), free];
+        (seg, points, vec![0.9, 0.9, 0.4])
+    }
+
     #[test]
     fn cables_the_second_pass_s_scale_does_not_suit_are_taken_in_with_their_ends() {
         // The second pass, shrunk by half for a 20 px power cable, found it alone.
-        let mut seg = found(
-            0.5,
-            vec![wide(
-                0,
-                [[100.0, 400.0], [540.0, 400.0]],
-                [Some(0), Some(1)],
-                20.0,
-            )],
-            vec![Some(0), Some(0), None],
-        );
-        let mut points = vec![[100.0, 400.0], [540.0, 400.0], [300.0, 100.0]];
-        let mut confidences = vec![0.9, 0.9, 0.4];
+        let (mut seg, mut points, mut confidences) = second_pass(20.0, [300.0, 100.0]);
         let earlier = found(
             1.0,
             vec![
@@ -499,6 +499,37 @@ mod tests {
         );
         assert_eq!(points[3..], [[50.0, 50.0], [250.0, 60.0]]);
         assert_eq!(confidences, [0.9, 0.9, 0.4, 0.6, 0.7]);
+    }
+
+    #[test]
+    fn a_cable_from_an_end_the_second_pass_left_alone_is_taken_at_any_width() {
+        // The second pass, at half the size, found one cable and nothing from end 2 (a
+        // pale wire it scores below the floor there).
+        let (mut seg, mut points, mut confidences) = second_pass(16.0, [300.0, 300.0]);
+        let earlier = found(
+            1.0,
+            vec![
+                // From end 2 to the border, as wide as this scale suits: taken.
+                wide(0, [[300.0, 300.0], [300.0, 0.0]], [Some(0), None], 16.0),
+                // From end 0, which has its cable here: not taken.
+                wide(1, [[100.0, 400.0], [100.0, 100.0]], [Some(1), None], 16.0),
+                // From no end: the second pass would have found it.
+                wide(2, [[50.0, 200.0], [400.0, 250.0]], [None, None], 16.0),
+            ],
+            Vec::new(),
+        );
+        let taken = seg.adopt_lost(
+            &mut points,
+            &mut confidences,
+            earlier,
+            (&[[301.0, 301.0], [101.0, 399.0]], &[0.5, 0.8]),
+            &Params::default(),
+        );
+        assert_eq!(taken, 1);
+        assert_eq!(seg.cables[1].ends[1], [300.0, 0.0]);
+        assert_eq!(seg.cables[1].end_indices, [Some(2), None]);
+        assert_eq!(seg.end_cables, [Some(0), Some(0), Some(1)]);
+        assert_eq!(points.len(), 3);
     }
 
     /// Readings of `(width, length, score)`.
