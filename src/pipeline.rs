@@ -151,8 +151,9 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         .filter(|&next| next != k);
     // At the scale one kind of cable asks for, another may be lost (a power cable
     // among signal wires): the first pass's cables that this scale does not suit, or
-    // that start at an end this pass left without a cable, are taken in. Shrunk for wide cables, the masks keep the first pass's width: the
-    // thin cables set the scene's scale, the wide ones are wide cables.
+    // that start at an end this pass left without a cable, are taken in. Shrunk for
+    // wide cables, the masks keep the first pass's width: the thin cables set the
+    // scene's scale, the wide ones are wide cables.
     let mut mixed_mask_scale = None;
     if let Some(next) = corrected {
         let shrinks = next < k;
