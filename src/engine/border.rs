@@ -162,7 +162,10 @@ fn cables_from(
         &crossing,
         &confidence,
         p,
-        Floor { score: floor, sure },
+        Floor {
+            sure,
+            ..Floor::new(floor)
+        },
         1.0,
         None,
     );

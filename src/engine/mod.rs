@@ -256,7 +256,10 @@ pub fn segment_oversegmented(
         &walks,
         confidence,
         params,
-        pairing::Floor::new(params.cable_score_floor(field.is_some())),
+        pairing::Floor {
+            reached: params.reached_floor(field.is_some()),
+            ..pairing::Floor::new(params.cable_score_floor(field.is_some()))
+        },
         params.field_through_factor,
         field,
     );

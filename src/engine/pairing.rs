@@ -57,21 +57,35 @@ pub struct Floor {
     /// For one walk alone (none joined) along which the cable field's mean is at least
     /// `.0`: `.1` instead.
     pub sure: Option<(f32, f32)>,
+    /// Times the floor for a hypothesis that arrives at another seed of confidence 1, by
+    /// one walk or two joined ([`Params::reached_floor`] for ends; 1 for the same floor
+    /// as every hypothesis).
+    pub reached: f32,
 }
 
 impl Floor {
     /// `score` for every hypothesis.
     pub fn new(score: f32) -> Self {
-        Self { score, sure: None }
+        Self {
+            score,
+            sure: None,
+            reached: 1.0,
+        }
     }
 
-    /// The lowest score for `h`, a hypothesis over `walks`.
-    fn of(&self, h: &Pairing, walks: &[Walk]) -> f32 {
-        match self.sure {
+    /// The lowest score for `h`, a hypothesis over `walks` between ends of the given
+    /// `confidence`. The lower floor of a hypothesis arriving at another end counts as
+    /// far as that end is credible: fully for a caller's end, less for a weak detection.
+    fn of(&self, h: &Pairing, walks: &[Walk], confidence: &[f32]) -> f32 {
+        let floor = match self.sure {
             Some((level, score)) if h.joined.is_none() && walks[h.walk].cable >= level => {
                 score.min(self.score)
             }
             _ => self.score,
+        };
+        match h.far {
+            FarEnd::Seed(t) => floor * (1.0 - (1.0 - self.reached) * confidence[t]),
+            _ => floor,
         }
     }
 }
@@ -129,7 +143,7 @@ pub fn pair(
         })
         .collect();
     hypotheses.extend(joins(walks, confidence, params, field, &passing));
-    hypotheses.retain(|h| h.score >= floor.of(h, walks));
+    hypotheses.retain(|h| h.score >= floor.of(h, walks, confidence));
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut used = vec![false; n_seeds];
     let mut taken = vec![false; vertex_count(walks)];
@@ -484,8 +498,8 @@ mod tests {
         let p = Params::default();
         let (level, low) = (p.field_border_sure_level, p.field_min_cable_score);
         let floor = Floor {
-            score: p.field_border_min_score,
             sure: Some((level, low)),
+            ..Floor::new(p.field_border_min_score)
         };
         // A walk leaving the frame with the field's mean `cable` along it, its lateral
         // contrast set so that it scores midway between the two floors.
@@ -503,6 +517,38 @@ mod tests {
         let mut w = walk(0, WalkEnd::Border, 1.0);
         w.contrast = (score / p.border_factor).powf(1.0 / p.quality_contrast_exponent);
         assert!(pair(&[w], &[1.0], &p, Floor::new(floor.score), 1.0, None).is_empty());
+    }
+
+    #[test]
+    fn a_cable_arriving_at_another_end_needs_only_its_share_of_the_floor() {
+        let p = Params::default();
+        let floor = p.field_min_cable_score;
+        // An unconfirmed walk to another end and a lost walk, both from an end of
+        // confidence 1 and scoring midway between the lowered floor and the floor.
+        let score = 0.5 * (1.0 + p.field_reached_floor) * floor;
+        let arriving = walk(0, WalkEnd::Seed(1), (score / p.unconfirmed_factor).powi(2));
+        let lost = walk(0, WalkEnd::Lost, (score / p.lost_factor).powi(2));
+        let kept = |w: &Walk, reached: f32, far_confidence: f32| {
+            let floor = Floor {
+                reached,
+                ..Floor::new(floor)
+            };
+            pair(
+                std::slice::from_ref(w),
+                &[1.0, far_confidence],
+                &p,
+                floor,
+                1.0,
+                None,
+            )
+            .len()
+        };
+        assert!(p.field_reached_floor < 1.0);
+        assert_eq!(kept(&arriving, p.field_reached_floor, 1.0), 1);
+        assert_eq!(kept(&arriving, 1.0, 1.0), 0);
+        assert_eq!(kept(&lost, p.field_reached_floor, 1.0), 0);
+        // Arriving at an end nothing vouches for earns nothing.
+        assert_eq!(kept(&arriving, p.field_reached_floor, 0.0), 0);
     }
 
     #[test]

@@ -348,6 +348,18 @@ pub struct Params {
     /// over the background out, so weaker cables (a pale cable on a pale card, whose
     /// lateral contrast is low) can be kept.
     pub field_min_cable_score: f32,
+    /// Share of `field_min_cable_score` that a cable from an end needs when it arrives
+    /// at another end of confidence 1, walked there or joined across a gap to a walk
+    /// from it; at an end of confidence c the floor is multiplied by 1 - c (1 - this).
+    /// Reaching a second end is evidence of a cable in itself, as far as that end is
+    /// credible: a walk over the background rarely arrives at a true end, but may link
+    /// two false ones. A dark cable on a dark board keeps little colour likelihood and
+    /// contrast to score by, and when no walk comes back from the far end to confirm
+    /// it, `unconfirmed_factor` sinks it under the floor (README, "How the engine uses
+    /// the field"). Cables seeded at the border or on pieces of the field keep their
+    /// floor: a piece's two ends are seeds because they bound one piece, so a walk from
+    /// one reaching the other adds nothing. 1: the same floor as every cable.
+    pub field_reached_floor: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
     /// (README, "How the engine uses the field"). 1 or more: no such seeds.
@@ -462,6 +474,7 @@ impl Default for Params {
             field_border_min_score: 0.12,
             field_border_sure_level: 0.7,
             field_min_cable_score: 0.03,
+            field_reached_floor: 0.7,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
             field_orphan_run_on: true,
@@ -547,6 +560,12 @@ impl Params {
         } else {
             self.min_cable_score
         }
+    }
+
+    /// The share of the floor that a cable arriving at another end needs:
+    /// `field_reached_floor` when a cable field guides the walks, 1 otherwise.
+    pub fn reached_floor(&self, field: bool) -> f32 {
+        if field { self.field_reached_floor } else { 1.0 }
     }
 
     /// These parameters with the fields named in `overrides` replaced, then validated.
