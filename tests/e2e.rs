@@ -97,7 +97,7 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
             .iter()
             .map(|c| {
                 let mut m = GrayImage::new(w, h);
-                render::stroke(&c.centreline, params.mask_width_px, w, h, |x, y| {
+                render::stroke_mask(&c.centreline, params.mask_width_px, w, h, |x, y| {
                     m.put_pixel(x, y, Luma([255]))
                 });
                 m
