@@ -13,10 +13,6 @@ use ort::value::TensorRef;
 use super::output::{self, Decoding, Letterbox, YoloLayout};
 use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field, locate};
 
-/// The photo size (640x480) the configured input size of a model with free input
-/// sides is meant for: working images of other sizes are scaled alike.
-const REFERENCE_PIXELS: f64 = 640.0 * 480.0;
-
 /// The size a photo is fed to the network at.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum InputSize {
@@ -50,9 +46,11 @@ impl InputSize {
                 "the model's input {declared:?} has {c} channels; it must take RGB ([1, 3, H, W])"
             )),
             [_, _, h, w] if h > 0 && w > 0 => Ok(Self::Fixed([w as usize, h as usize])),
+            // The configured input size is meant for a 640x480 photo; working images
+            // of other sizes are scaled alike.
             [_, _, h, w] if free(h) && free(w) => Ok(Self::Dynamic {
                 scale: ((config.model_input_width * config.model_input_height) as f64
-                    / REFERENCE_PIXELS)
+                    / crate::engine::REFERENCE_PIXELS)
                     .sqrt(),
                 stride: config.model_kind.stride(),
             }),

@@ -65,6 +65,11 @@ use walk::{Seed, Terrain};
 /// Smallest image side the engine accepts, pixels.
 pub const MIN_SIDE: u32 = 16;
 
+/// Pixels of the photos the development split is shot at (640x480): the size the
+/// engine's defaults, the network's input size and the masks' pixel convention are
+/// set for.
+pub const REFERENCE_PIXELS: f64 = 640.0 * 480.0;
+
 /// Output of [`segment`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Segmentation {

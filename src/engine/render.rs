@@ -99,18 +99,17 @@ pub fn cable_mask(cable: &Cable, width: u32, height: u32, mask_width_px: f32) ->
 /// development split: matched-cable IoU 0.717 with 0.0, 0.755 with 0.5.
 pub const MASK_PIXEL_CENTRE: f32 = 0.5;
 
-/// Pixels of the photos [`MASK_PIXEL_CENTRE`] was measured on (640x480).
-pub const MASK_REFERENCE_PIXELS: f32 = 640.0 * 480.0;
-
 /// Where pixel centres lie in a mask of `width` x `height`: [`MASK_PIXEL_CENTRE`]
-/// scaled with the photo's linear size against [`MASK_REFERENCE_PIXELS`]. A mask drawn at
-/// 640x480 and resized by s lies 0.5 s pixels off its centrelines, so a photo of twice
-/// the resolution gets 1.0 and one of half, 0.25. A mask drawn at its own resolution
+/// scaled with the photo's linear size against [`super::REFERENCE_PIXELS`], the size it
+/// was measured at. A mask drawn at 640x480 and resized by s lies 0.5 s pixels off its
+/// centrelines, so a photo of twice the resolution gets 1.0 and one of half, 0.25. A
+/// mask drawn at its own resolution
 /// would want 0.5 everywhere; the resized convention is the one the scaled evaluation
 /// (`eval --scale`) measures, and its error on a natively drawn mask stays a fixed
 /// share of the cables' width when they scale with the photo.
 pub fn mask_pixel_centre(width: u32, height: u32) -> f32 {
-    MASK_PIXEL_CENTRE * (width as f32 * height as f32 / MASK_REFERENCE_PIXELS).sqrt()
+    MASK_PIXEL_CENTRE
+        * (f64::from(width) * f64::from(height) / super::REFERENCE_PIXELS).sqrt() as f32
 }
 
 /// Calls `set(x, y)` for every pixel whose centre (see [`MASK_PIXEL_CENTRE`]) is within
