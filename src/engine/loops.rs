@@ -68,8 +68,11 @@ const MAX_COLOUR_DE: f32 = 30.0;
 /// course twice as much as one of the cable's colour (the cost grows with its square):
 /// the course goes round the loop rather than along another cable across it.
 const COURSE_DE: f32 = 15.0;
-/// Share of `field_orphan_level` a superpixel's cable probability needs for a loop's
-/// course to cross it (its ends, where it leaves and comes back, need the whole).
+/// Share of `field_orphan_level` a superpixel's cable probability needs to lie on a
+/// loop's course, where the loop leaves its cable and comes back to it included: a
+/// loop's tight bend, the places where other cables cross it and those where it
+/// touches its cable read fainter than a straight cable in the open (a thin loop
+/// leaving its cable at a shallow angle read 0.46 and 0.32 there).
 const COURSE_FIELD_SHARE: f32 = 0.6;
 /// A cable found along a loop is the loop found on its own where it lies within this
 /// many of its widths (beyond the half width and half superpixel of the other checks)
@@ -189,13 +192,10 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
         0.5 * cable.width_px.max(nominal) + 0.5 * sp.step,
         ground,
     );
-    let free_at = |v: u32, share: f32| {
-        field[v as usize].cable >= share * p.field_orphan_level && !on[v as usize]
+    // Fainter field than an orphan's: colour keeps the course on its cable.
+    let free = |v: u32| {
+        field[v as usize].cable >= COURSE_FIELD_SHARE * p.field_orphan_level && !on[v as usize]
     };
-    let free = |v: u32| free_at(v, 1.0);
-    // The course may cross fainter field: a loop's tight bend and the places where
-    // other cables cross it read fainter, and colour keeps it on its cable.
-    let faint = |v: u32| free_at(v, COURSE_FIELD_SHARE);
     let arc = arc_lengths(line);
     let centroid = |v: u32| graph.vertices[v as usize].centroid;
     let along = |q: [f32; 2]| {
@@ -233,7 +233,7 @@ fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
     let mut parent = vec![0; graph.len()];
     let mut best: Option<(f32, LoopCourse)> = None;
     for &(a, sa) in &touching {
-        let order = cheapest(graph, a, &faint, &step_cost, &mut cost, &mut parent);
+        let order = cheapest(graph, a, &free, &step_cost, &mut cost, &mut parent);
         for &(b, sb) in &touching {
             if b == a || cost[b as usize].is_infinite() || (sa - sb).abs() > MAX_SPAN * nominal {
                 continue;
