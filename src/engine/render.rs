@@ -103,10 +103,10 @@ pub const MASK_PIXEL_CENTRE: f32 = 0.5;
 /// scaled with the photo's linear size against [`super::REFERENCE_PIXELS`], the size it
 /// was measured at. A mask drawn at 640x480 and resized by s lies 0.5 s pixels off its
 /// centrelines, so a photo of twice the resolution gets 1.0 and one of half, 0.25. A
-/// mask drawn at its own resolution
-/// would want 0.5 everywhere; the resized convention is the one the scaled evaluation
-/// (`eval --scale`) measures, and its error on a natively drawn mask stays a fixed
-/// share of the cables' width when they scale with the photo.
+/// mask drawn at its own resolution would want 0.5 everywhere; the resized convention
+/// is the one the scaled evaluation (`eval --scale`) measures, and its error on a
+/// natively drawn mask stays a fixed share of the cables' width when they scale with
+/// the photo.
 pub fn mask_pixel_centre(width: u32, height: u32) -> f32 {
     MASK_PIXEL_CENTRE
         * (f64::from(width) * f64::from(height) / super::REFERENCE_PIXELS).sqrt() as f32
