@@ -109,8 +109,8 @@ struct SeedCables {
 /// close along a whole side would be mostly out of view.
 /// With `chained`, the seeds are no cable's ends (the ends of the field's pieces): the
 /// cables found are chained through them into whole ones ([`chain`]) and, with
-/// `field_orphan_run_on`, run on past them where a walk lost the cable further on
-/// ([`extend`]).
+/// `field_orphan_run_on`, run on past them where a walk lost the cable further on or
+/// left the frame ([`extend`]).
 fn cables_from(
     scene: &Scene<'_>,
     seeds: &[Seed],
@@ -178,8 +178,8 @@ fn cables_from(
         let centroid = |v: u32| terrain.graph.vertices[v as usize].centroid;
         let mut courses = chain(&crossing, &picked, &links, centroid, (p, floor));
         if p.field_orphan_run_on {
-            // The ways on ([`extend`] takes those that lost the cable): as long as a
-            // crossing walk and as little over cables already found.
+            // The ways on ([`extend`] takes those that lost the cable or left the
+            // frame): as long as a crossing walk and as little over cables already found.
             let ways_on: Vec<Walk> = links
                 .into_iter()
                 .filter(|w| w.length_px >= min_length && unexplained(w))

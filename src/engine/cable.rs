@@ -72,12 +72,12 @@ pub(super) fn model_cable(scene: &Scene<'_>, choice: &Pairing) -> Option<Cable> 
 /// The spline model of a cable along `course` (see [`model_cable`]). A course that
 /// starts at a seed starts exactly there, held as firmly as an end; one that starts
 /// open (a cable run on past the end of a piece of the field, [`super::chains`]) at its
-/// first superpixel; `None` when it starts at the border.
+/// first superpixel; one that starts at the border (run on out of the frame) where its
+/// first superpixels head out of it, held there like the far end's exit.
 pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> {
     let start_seed = match course.ends[0] {
         FarEnd::Seed(s) => Some(s),
-        FarEnd::Open => None,
-        FarEnd::Border => return None,
+        FarEnd::Open | FarEnd::Border => None,
     };
     let Scene {
         seeds,
@@ -116,20 +116,23 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
             Some(t)
         }
         FarEnd::Border => {
-            let dir = heading(&points, params.heading_span_px);
-            let reach = params.border_exit_steps * sp.step;
-            let last = points[points.len() - 1];
-            if let Some(exit) = border_exit(last, dir, sp.width, sp.height, reach) {
-                points.push(exit);
-                weights.push(1.0);
-                // Held there as firmly as an end ([`fit_refined`]).
-                far_anchor = Some((exit, params.end_weight));
-            }
+            // Held there as firmly as an end ([`fit_refined`]).
+            far_anchor = exit_past(&mut points, &mut weights, sp, params)
+                .map(|exit| (exit, params.end_weight));
             None
         }
         FarEnd::Open => None,
     };
-    let anchors = [start.map(|p| (p, params.end_weight)), far_anchor];
+    let mut start_anchor = start.map(|p| (p, params.end_weight));
+    if course.ends[0] == FarEnd::Border {
+        points.reverse();
+        weights.reverse();
+        start_anchor =
+            exit_past(&mut points, &mut weights, sp, params).map(|exit| (exit, params.end_weight));
+        points.reverse();
+        weights.reverse();
+    }
+    let anchors = [start_anchor, far_anchor];
     let Fitted {
         spline,
         polyline,
@@ -157,6 +160,23 @@ pub(super) fn model_course(scene: &Scene<'_>, course: &Course) -> Option<Cable> 
         ridge_share: ridge_share.unwrap_or(1.0),
         score: (course.score * on_cable).clamp(0.0, 1.0),
     })
+}
+
+/// Appends to `points` (fit weight 1) where their last ones, heading out of the
+/// frame, leave it within `border_exit_steps` superpixel steps, and returns it.
+fn exit_past(
+    points: &mut Vec<[f32; 2]>,
+    weights: &mut Vec<f32>,
+    sp: &Superpixels,
+    params: &Params,
+) -> Option<[f32; 2]> {
+    let dir = heading(points, params.heading_span_px);
+    let reach = params.border_exit_steps * sp.step;
+    let last = *points.last()?;
+    let exit = border_exit(last, dir, sp.width, sp.height, reach)?;
+    points.push(exit);
+    weights.push(1.0);
+    Some(exit)
 }
 
 /// A centreline fitted and refined on the image ([`fit_refined`]).

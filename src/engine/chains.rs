@@ -10,9 +10,12 @@
 //! A piece ends where the field's unexplained cable ends: at a crossing with a cable
 //! already found (a link goes on there), or where the cable's probability fades before
 //! the cable does, short of the end the network missed. There the walks from the
-//! piece's seed that lost the cable are the cable's way on, to where the colour or the
-//! field gives out: a chained course that still ends on a seed runs on along the best of
-//! them that continues it smoothly ([`extend`]).
+//! piece's seed that lost the cable or left the frame are the cable's way on, to where
+//! the colour or the field gives out or to the frame's edge: a chained course that
+//! still ends on a seed runs on along the best of them that continues it smoothly
+//! ([`extend`]). A seed by a crossing whose piece runs to the frame's edge has walks
+//! out of the frame either way, along its piece and across the crossing: the pairing
+//! takes one, and the course runs on along the other.
 
 use super::Params;
 use super::geometry::heading;
@@ -153,10 +156,10 @@ pub fn chain(
 }
 
 /// Runs every course of `courses` that ends on a seed on along the best walk of
-/// `extensions` from that seed (walks that lost the cable, over superpixels no cable
-/// explains) that scores at least `min_score` and leaves the seed turning at most
-/// `max_turn_deg` from the course's heading there; that end is then open and the
-/// course scores at most the walk's quality.
+/// `extensions` from that seed (walks that lost the cable or left the frame, over
+/// superpixels no cable explains) that scores at least `min_score` and leaves the seed
+/// turning at most `max_turn_deg` from the course's heading there; that end is then
+/// open or at the border, and the course scores at most the walk's quality.
 pub fn extend(
     courses: &mut [Course],
     extensions: &[Walk],
@@ -173,7 +176,7 @@ pub fn extend(
             };
             let lost: Vec<(f32, &Walk)> = extensions
                 .iter()
-                .filter(|w| w.seed == seed && w.end == WalkEnd::Lost)
+                .filter(|w| w.seed == seed && matches!(w.end, WalkEnd::Lost | WalkEnd::Border))
                 .map(|w| (w.quality(params), w))
                 .filter(|&(q, _)| q >= min_score)
                 .collect();
@@ -198,7 +201,10 @@ pub fn extend(
                         course.vertices.push(v);
                     }
                 }
-                course.ends[end] = FarEnd::Open;
+                course.ends[end] = match walk.end {
+                    WalkEnd::Border => FarEnd::Border,
+                    _ => FarEnd::Open,
+                };
                 course.score = course.score.min(quality);
             }
             if end == 0 {

@@ -368,8 +368,8 @@ pub struct Params {
     pub field_orphan_min_steps: f32,
     /// A cable found from such a piece runs on past the piece's ends, along the walks
     /// from them that lost the cable further on (where the field fades before the
-    /// cable does, short of the end the network missed; README, "How the engine uses
-    /// the field").
+    /// cable does, short of the end the network missed) or left the frame (across a
+    /// cable found at the piece's end; README, "How the engine uses the field").
     pub field_orphan_run_on: bool,
 }
 

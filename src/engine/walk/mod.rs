@@ -540,11 +540,25 @@ impl<'a> Walker<'a> {
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((t, _)) = ahead {
             WalkEnd::Seed(t)
-        } else if self.near_border_heading_out(here, dir, p.stopped_border_reach) {
+        } else if self.near_border_heading_out(here, dir, p.stopped_border_reach)
+            || self.cut_by_border(here, dir)
+        {
             WalkEnd::Border
         } else {
             WalkEnd::Lost
         }
+    }
+
+    /// True when `here` lies within half a nominal cable width of an edge and `dir`
+    /// does not head back into the frame: a cable leaving the frame at a grazing angle,
+    /// its last superpixels slivers along the edge, runs on out of view there.
+    fn cut_by_border(&self, here: [f32; 2], dir: [f32; 2]) -> bool {
+        let m = 0.5 * self.params.nominal_width_px;
+        let (w, h) = (self.lab.width as f32, self.lab.height as f32);
+        (here[0] < m && dir[0] <= 0.0)
+            || (here[0] > w - 1.0 - m && dir[0] >= 0.0)
+            || (here[1] < m && dir[1] <= 0.0)
+            || (here[1] > h - 1.0 - m && dir[1] >= 0.0)
     }
 
     /// True when `here` lies within `factor · border_margin_px` of an edge that `dir`
