@@ -174,20 +174,20 @@ pub fn extend(
             let FarEnd::Seed(seed) = course.ends[end] else {
                 continue;
             };
-            let lost: Vec<(f32, &Walk)> = extensions
+            let ways: Vec<(f32, &Walk)> = extensions
                 .iter()
                 .filter(|w| w.seed == seed && matches!(w.end, WalkEnd::Lost | WalkEnd::Border))
                 .map(|w| (w.quality(params), w))
                 .filter(|&(q, _)| q >= min_score)
                 .collect();
-            if lost.is_empty() {
+            if ways.is_empty() {
                 continue;
             }
             if end == 0 {
                 course.vertices.reverse();
             }
             let into = heading(&centroids(&course.vertices), span);
-            let best = lost
+            let best = ways
                 .into_iter()
                 .filter(|(_, w)| {
                     let back: Vec<[f32; 2]> = centroids(&w.vertices).into_iter().rev().collect();
@@ -301,6 +301,14 @@ mod tests {
         assert_eq!(c.vertices, (0..8).collect::<Vec<u32>>());
         assert_eq!(c.ends, [FarEnd::Seed(0), FarEnd::Open]);
         assert_eq!(c.score, 0.5_f32.min(on[0].quality(&p)));
+        // Along one that left the frame instead, the course ends at the border.
+        let out = Walk {
+            end: WalkEnd::Border,
+            ..on[0].clone()
+        };
+        let c = course(std::slice::from_ref(&out), 0.1);
+        assert_eq!(c.vertices, (0..8).collect::<Vec<u32>>());
+        assert_eq!(c.ends, [FarEnd::Seed(0), FarEnd::Border]);
         // Below the floor, or only the sharp turn: the piece stays as it was.
         for (extensions, floor) in [(&on[..], 0.7), (&on[1..], 0.1)] {
             let c = course(extensions, floor);
