@@ -553,24 +553,34 @@ impl<'a> Walker<'a> {
     /// does not head back into the frame: a cable leaving the frame at a grazing angle,
     /// its last superpixels slivers along the edge, runs on out of view there.
     fn cut_by_border(&self, here: [f32; 2], dir: [f32; 2]) -> bool {
-        let m = 0.5 * self.params.nominal_width_px;
-        let (w, h) = (self.lab.width as f32, self.lab.height as f32);
-        (here[0] < m && dir[0] <= 0.0)
-            || (here[0] > w - 1.0 - m && dir[0] >= 0.0)
-            || (here[1] < m && dir[1] <= 0.0)
-            || (here[1] > h - 1.0 - m && dir[1] >= 0.0)
+        self.at_edge_heading(here, dir, 0.5 * self.params.nominal_width_px, |out| {
+            out >= 0.0
+        })
     }
 
     /// True when `here` lies within `factor · border_margin_px` of an edge that `dir`
     /// points towards.
     fn near_border_heading_out(&self, here: [f32; 2], dir: [f32; 2], factor: f32) -> bool {
-        let m = self.params.border_margin_px * factor;
-        let (w, h) = (self.lab.width as f32, self.lab.height as f32);
         let out = self.params.border_outward_cos;
-        (here[0] < m && dir[0] < -out)
-            || (here[0] > w - 1.0 - m && dir[0] > out)
-            || (here[1] < m && dir[1] < -out)
-            || (here[1] > h - 1.0 - m && dir[1] > out)
+        self.at_edge_heading(here, dir, self.params.border_margin_px * factor, |o| {
+            o > out
+        })
+    }
+
+    /// True when `here` lies within `margin` of an edge along whose outward normal
+    /// `dir`'s component passes `outward`.
+    fn at_edge_heading(
+        &self,
+        here: [f32; 2],
+        dir: [f32; 2],
+        margin: f32,
+        outward: impl Fn(f32) -> bool,
+    ) -> bool {
+        let (w, h) = (self.lab.width as f32, self.lab.height as f32);
+        (here[0] < margin && outward(-dir[0]))
+            || (here[0] > w - 1.0 - margin && outward(dir[0]))
+            || (here[1] < margin && outward(-dir[1]))
+            || (here[1] > h - 1.0 - margin && outward(dir[1]))
     }
 }
 
