@@ -200,6 +200,15 @@ fn visual_likelihood(similarity: f32, params: &Params) -> f32 {
     1.0 / (1.0 + params.c_visual * (1.0 - similarity))
 }
 
+/// How far a walk stopped against an edge may head into the frame and still have been
+/// cut by it ([`Walker::cut_by_border`]), as the sine of the angle (0.2: about 12°).
+/// Its heading is read from superpixel centroids, and those against the edge lie on
+/// the frame's side of the cable (they hold no pixels beyond it), so a cable running
+/// out along the edge reads as leaning into the frame by a few degrees (4° where a
+/// thin wire, its photo enlarged 1.76-fold, was taken as lost 5.8 px from the edge it
+/// leaves: README, "A walk stopped against the edge it leaves").
+const GRAZING_INWARD: f32 = 0.2;
+
 /// How far inside the frame a border walk's exit is placed (`Walk::end_point`), so
 /// that what is read there is the photo's last pixels.
 const EXIT_INSET_PX: f32 = 1.0;
@@ -549,12 +558,13 @@ impl<'a> Walker<'a> {
         }
     }
 
-    /// True when `here` lies within half a nominal cable width of an edge and `dir`
-    /// does not head back into the frame: a cable leaving the frame at a grazing angle,
-    /// its last superpixels slivers along the edge, runs on out of view there.
+    /// True when `here` lies within a nominal cable width of an edge and `dir` runs
+    /// along it or out of the frame, leaning into the frame by at most
+    /// [`GRAZING_INWARD`]: a cable leaving the frame at a grazing angle, its last
+    /// superpixels slivers along the edge, runs on out of view there.
     fn cut_by_border(&self, here: [f32; 2], dir: [f32; 2]) -> bool {
-        self.at_edge_heading(here, dir, 0.5 * self.params.nominal_width_px, |out| {
-            out >= 0.0
+        self.at_edge_heading(here, dir, self.params.nominal_width_px, |out| {
+            out >= -GRAZING_INWARD
         })
     }
 
@@ -611,6 +621,18 @@ mod tests {
         seeds: &[Seed],
         params: &Params,
     ) -> Vec<Walk> {
+        on_a_line(line, cable, params, |terrain| {
+            walk_all(terrain, seeds, true).unwrap()
+        })
+    }
+
+    /// `then` on the terrain of [`walks_on_a_graded_line`].
+    fn on_a_line<R>(
+        line: impl Fn(usize) -> u8,
+        cable: impl Fn(usize) -> f32,
+        params: &Params,
+        then: impl FnOnce(Terrain<'_>) -> R,
+    ) -> R {
         let (w, h) = (200usize, 60usize);
         let labels: Vec<u32> = (0..w * h)
             .map(|p| ((p / w) / 20 * 10 + p % w / 20) as u32)
@@ -655,7 +677,7 @@ mod tests {
             params,
             deadline: Deadline::NONE,
         };
-        walk_all(terrain, seeds, true).unwrap()
+        then(terrain)
     }
 
     /// A dark line (level 40) from the left edge to column `end`.
@@ -677,6 +699,42 @@ mod tests {
             .into_iter()
             .map(|w| w.vertices)
             .collect()
+    }
+
+    #[test]
+    fn a_walk_stopped_against_an_edge_heading_along_it_has_left_the_frame() {
+        let p = Params::default();
+        let seeds = [Seed {
+            point: [30.0, 30.0],
+            vertex: 11,
+        }];
+        on_a_line(
+            |_| 160,
+            |_| 0.0,
+            &p,
+            |terrain| {
+                let walker = Walker::new(terrain, &seeds);
+                let w = p.nominal_width_px;
+                // 0.8 of a cable width from the right edge (x = 199), heading up and 4° into
+                // the frame: centroids against an edge read so where a cable runs out along
+                // it (once lost: half a width and no lean into the frame were allowed).
+                let up = [-0.06, -0.998];
+                assert_eq!(
+                    walker.stopped(0, [199.0 - 0.8 * w, 30.0], up),
+                    WalkEnd::Border
+                );
+                // Farther from the edge, or clearly heading back into the frame: lost.
+                assert_eq!(
+                    walker.stopped(0, [199.0 - 1.5 * w, 30.0], up),
+                    WalkEnd::Lost
+                );
+                let back = [-0.5, -0.866];
+                assert_eq!(
+                    walker.stopped(0, [199.0 - 0.8 * w, 30.0], back),
+                    WalkEnd::Lost
+                );
+            },
+        );
     }
 
     #[test]
