@@ -57,11 +57,12 @@ pub fn field_may_miss_wide_cables(full: &CableField) -> bool {
 /// scale from which that pass is taken to have found it ([`Segmentation::adopt_lost`]).
 const EXPLAINED_SHARE: f32 = 0.5;
 
-/// Shortest cable, in nominal widths at its own pass's scale, that
-/// [`Segmentation::adopt_lost`] takes in: the first pass, at a scale that does not
-/// suit every cable, also finds short pieces of the wide ones (along an edge, across a
-/// highlight).
-const ADOPT_MIN_LENGTH: f32 = 20.0;
+/// Shortest cable, in nominal widths at its own pass's scale, taken for a whole cable:
+/// a pass at a scale that does not suit every cable also finds short pieces of the
+/// wide ones (along an edge, across a highlight). Only such cables are taken in from
+/// another pass ([`Segmentation::adopt_lost`]) and bound how far a photo is shrunk
+/// ([`thin_width`]).
+const WHOLE_MIN_LENGTH: f32 = 20.0;
 
 /// Relative size changes smaller than this are not worth a resampling.
 const SAME_SIZE: f64 = 0.05;
@@ -262,21 +263,32 @@ impl Segmentation {
         }
     }
 
-    /// Nominal over measured width of these cables in working pixels of `frame`;
-    /// `None` when there is no cable to measure.
+    /// Nominal over measured width of these cables in working pixels of `frame`, or,
+    /// where that asks to shrink the photo, no less than keeps its thin cables
+    /// ([`thin_width`]) at least `nominal_width_px / width_tolerance` wide (and at most
+    /// 1): power cables among signal wires would have the photo shrunk until the wires
+    /// are 2-3 px wide and lost, where at this scale both are followed (README, Any
+    /// camera, "Cables of two widths in one photo"). `None` when there is no cable to
+    /// measure.
     fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
-        let widths: Vec<Reading> = self
+        let scale = frame.scale();
+        let readings: Vec<Reading> = self
             .cables
             .iter()
             .map(|c| Reading {
-                width: c.width_px * frame.scale(),
-                length: c.length_px,
+                width: c.width_px * scale,
+                length: c.length_px * scale,
                 score: c.score,
             })
             .filter(|r| r.width.is_finite() && r.width > 0.0)
             .collect();
-        let width = measured_width(widths, params.nominal_width_px)?;
-        Some(params.nominal_width_px as f64 / width)
+        let nominal = params.nominal_width_px;
+        let thin = thin_width(&readings, WHOLE_MIN_LENGTH * nominal);
+        let ratio = f64::from(nominal) / measured_width(readings, nominal)?;
+        let floor = thin.map_or(0.0, |thin| {
+            (f64::from(nominal / params.width_tolerance) / thin).min(1.0)
+        });
+        Some(if ratio < 1.0 { ratio.max(floor) } else { ratio })
     }
 
     /// The mask stroke width in the photo's pixels for `mask_width_px` working pixels,
@@ -294,7 +306,7 @@ impl Segmentation {
     /// `nominal_width_px` by more than `width_tolerance`, or when it starts at an end
     /// this pass left without a cable (a pale wire that scores under the floor at this
     /// pass's size: the end is the same one, and the other pass followed it), provided
-    /// it is at least [`ADOPT_MIN_LENGTH`] nominal widths long at its own scale and
+    /// it is at least [`WHOLE_MIN_LENGTH`] nominal widths long at its own scale and
     /// fewer than [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within
     /// half their width plus its own). Its ends come along: an end of this pass within
     /// the cable's width of one of its ends is that end (the caller's ends are the same
@@ -311,7 +323,7 @@ impl Segmentation {
         params: &Params,
     ) -> usize {
         let own = self.cables.len();
-        let min_length = ADOPT_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
+        let min_length = WHOLE_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
         let mut taken = 0;
         for mut cable in earlier.cables {
             let same = |i: usize| {
@@ -384,14 +396,37 @@ fn off_by_more(ratio: f64, tolerance: f32) -> bool {
 struct Reading {
     /// Its width, working pixels.
     width: f32,
-    /// Its length, any unit.
+    /// Its length, working pixels.
     length: f32,
     /// Its score.
     score: f32,
 }
 
-/// The width of the credible cables of `readings` (those scoring at least
-/// [`CREDIBLE_SCORE_SHARE`] of the best score), in working pixels: their median width,
+/// The readings of `readings` that are credible cables: those scoring at least
+/// [`CREDIBLE_SCORE_SHARE`] of the best score.
+fn credible(readings: Vec<Reading>) -> Vec<Reading> {
+    let best = readings.iter().map(|r| r.score).fold(0.0, f32::max);
+    readings
+        .into_iter()
+        .filter(|r| r.score >= CREDIBLE_SCORE_SHARE * best)
+        .collect()
+}
+
+/// The width at most which two [`credible`] cables of `readings` at least `min_length`
+/// long read (the second narrowest), in working pixels; `None` when there are not two. One reading can be wrong: zoomed 3x,
+/// a two-tone cable about 20 px wide walked along one of its colours read 6.6 px
+/// (simple/00023), and bounding the shrink by it cost the zoom rows up to 0.025.
+fn thin_width(readings: &[Reading], min_length: f32) -> Option<f64> {
+    let mut widths: Vec<f64> = credible(readings.to_vec())
+        .iter()
+        .filter(|r| r.length >= min_length)
+        .map(|r| f64::from(r.width))
+        .collect();
+    widths.sort_by(f64::total_cmp);
+    widths.get(1).copied()
+}
+
+/// The width of the [`credible`] cables of `readings`, in working pixels: their median width,
 /// or their length-weighted median width when that lies farther from `nominal` (by
 /// ratio); `None` for no cable. At the wrong scale the engine also finds stray cables
 /// (a walk over superpixels much wider or narrower than the cables), and their measured
@@ -399,11 +434,7 @@ struct Reading {
 /// plain median (two thin rods measured 3.2 and 9.2 px: the median 9.2 asks for no
 /// correction), so the estimate farther from nominal is the one taken.
 fn measured_width(readings: Vec<Reading>, nominal: f32) -> Option<f64> {
-    let best = readings.iter().map(|r| r.score).fold(0.0, f32::max);
-    let mut widths: Vec<Reading> = readings
-        .into_iter()
-        .filter(|r| r.score >= CREDIBLE_SCORE_SHARE * best)
-        .collect();
+    let mut widths = credible(readings);
     widths.sort_by(|a, b| a.width.partial_cmp(&b.width).unwrap_or(Ordering::Equal));
     let median = f64::from(widths.get(widths.len() / 2)?.width);
     let half = widths.iter().map(|w| w.length.max(0.0)).sum::<f32>() / 2.0;
@@ -542,6 +573,52 @@ mod tests {
                 score,
             })
             .collect()
+    }
+
+    #[test]
+    fn a_photo_is_shrunk_no_further_than_keeps_its_wires_followable() {
+        let p = Params::default();
+        let vga = WorkingFrame::choose(640, 480, &p);
+        let line = |id: usize, y: f32, length: f32, width: f32| {
+            wide(id, [[20.0, y], [20.0 + length, y]], [None, None], width)
+        };
+        // Four pieces of 19 px power cables decide the width read: shrunk to 0.41.
+        let power: Vec<Cable> = (0..4)
+            .map(|i| line(i, 60.0 * i as f32, 600.0, 19.0))
+            .collect();
+        let alone = found(1.0, power, vec![]);
+        let shrink = alone.width_correction(&vga, &p).unwrap();
+        assert!((shrink - 7.8 / 19.0).abs() < 1e-6, "{shrink}");
+        let with = |wires: &[(f32, f32)]| {
+            let mut seg = alone.clone();
+            for (k, &(length, width)) in wires.iter().enumerate() {
+                seg.cables
+                    .push(line(4 + k, 300.0 + 40.0 * k as f32, length, width));
+            }
+            seg
+        };
+        // With two 7 px wires, no further than makes them 5.6 px (nominal /
+        // width_tolerance): within tolerance of this scale, so not at all, and their
+        // masks are not widened for the power cables either.
+        let wires = with(&[(600.0, 6.5), (600.0, 7.0)]);
+        assert_eq!(wires.width_correction(&vga, &p), None);
+        assert_eq!(wires.mask_correction(&vga, &p, p.mask_width_tolerance), 1.0);
+        // Wires of 9.5 and 10 px allow 0.56.
+        let bounded = with(&[(600.0, 9.5), (600.0, 10.0)])
+            .width_correction(&vga, &p)
+            .unwrap();
+        assert!((bounded - 7.8 / 1.4 / 10.0).abs() < 1e-6, "{bounded}");
+        // One wire may be a misread wide cable; a short one may be a piece of one.
+        for wires in [with(&[(600.0, 7.0)]), with(&[(600.0, 7.0), (130.0, 7.0)])] {
+            assert_eq!(wires.width_correction(&vga, &p), Some(shrink));
+        }
+        // Thin rods ask for an enlargement, which nothing bounds.
+        let rods = found(
+            1.0,
+            vec![line(0, 100.0, 600.0, 3.0), line(1, 200.0, 600.0, 3.0)],
+            vec![],
+        );
+        assert_eq!(rods.width_correction(&vga, &p), Some(2.0));
     }
 
     #[test]
