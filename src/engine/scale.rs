@@ -268,8 +268,8 @@ impl Segmentation {
     /// ([`thin_width`]) at least `nominal_width_px / width_tolerance` wide (and at most
     /// 1): power cables among signal wires would have the photo shrunk until the wires
     /// are 2-3 px wide and lost, where at this scale both are followed (README, Any
-    /// camera, "Cables of two widths in one photo"). `None` when there is no cable to
-    /// measure.
+    /// camera, "Power cables do not shrink a photo past its wires"). `None` when there
+    /// is no cable to measure.
     fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let scale = frame.scale();
         let readings: Vec<Reading> = self
@@ -413,9 +413,10 @@ fn credible(readings: Vec<Reading>) -> Vec<Reading> {
 }
 
 /// The width at most which two [`credible`] cables of `readings` at least `min_length`
-/// long read (the second narrowest), in working pixels; `None` when there are not two. One reading can be wrong: zoomed 3x,
-/// a two-tone cable about 20 px wide walked along one of its colours read 6.6 px
-/// (simple/00023), and bounding the shrink by it cost the zoom rows up to 0.025.
+/// long read (the second narrowest), in working pixels; `None` when there are not two.
+/// One reading can be wrong: zoomed 3x, a two-tone cable about 20 px wide walked along
+/// one of its colours read 6.6 px (simple/00023), and bounding the shrink by it cost
+/// the zoom rows up to 0.025.
 fn thin_width(readings: &[Reading], min_length: f32) -> Option<f64> {
     let mut widths: Vec<f64> = credible(readings.to_vec())
         .iter()
@@ -426,9 +427,9 @@ fn thin_width(readings: &[Reading], min_length: f32) -> Option<f64> {
     widths.get(1).copied()
 }
 
-/// The width of the [`credible`] cables of `readings`, in working pixels: their median width,
-/// or their length-weighted median width when that lies farther from `nominal` (by
-/// ratio); `None` for no cable. At the wrong scale the engine also finds stray cables
+/// The width of the [`credible`] cables of `readings`, in working pixels: their median
+/// width, or their length-weighted median width when that lies farther from `nominal`
+/// (by ratio); `None` for no cable. At the wrong scale the engine also finds stray cables
 /// (a walk over superpixels much wider or narrower than the cables), and their measured
 /// widths lean towards the nominal width; with few cables one of them can decide the
 /// plain median (two thin rods measured 3.2 and 9.2 px: the median 9.2 asks for no
