@@ -272,16 +272,17 @@ impl Segmentation {
     /// is no cable to measure.
     fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let scale = frame.scale();
-        let readings: Vec<Reading> = self
-            .cables
-            .iter()
-            .map(|c| Reading {
-                width: c.width_px * scale,
-                length: c.length_px * scale,
-                score: c.score,
-            })
-            .filter(|r| r.width.is_finite() && r.width > 0.0)
-            .collect();
+        let readings = credible(
+            self.cables
+                .iter()
+                .map(|c| Reading {
+                    width: c.width_px * scale,
+                    length: c.length_px * scale,
+                    score: c.score,
+                })
+                .filter(|r| r.width.is_finite() && r.width > 0.0)
+                .collect(),
+        );
         let nominal = params.nominal_width_px;
         let thin = thin_width(&readings, WHOLE_MIN_LENGTH * nominal);
         let ratio = f64::from(nominal) / measured_width(readings, nominal)?;
@@ -412,13 +413,14 @@ fn credible(readings: Vec<Reading>) -> Vec<Reading> {
         .collect()
 }
 
-/// The width at most which two [`credible`] cables of `readings` at least `min_length`
-/// long read (the second narrowest), in working pixels; `None` when there are not two.
+/// The width at most which two cables of `readings` ([`credible`] ones) at least
+/// `min_length` long read (the second narrowest), in working pixels; `None` when there
+/// are not two.
 /// One reading can be wrong: zoomed 3x, a two-tone cable about 20 px wide walked along
 /// one of its colours read 6.6 px (simple/00023), and bounding the shrink by it cost
 /// the zoom rows up to 0.025.
 fn thin_width(readings: &[Reading], min_length: f32) -> Option<f64> {
-    let mut widths: Vec<f64> = credible(readings.to_vec())
+    let mut widths: Vec<f64> = readings
         .iter()
         .filter(|r| r.length >= min_length)
         .map(|r| f64::from(r.width))
@@ -427,15 +429,14 @@ fn thin_width(readings: &[Reading], min_length: f32) -> Option<f64> {
     widths.get(1).copied()
 }
 
-/// The width of the [`credible`] cables of `readings`, in working pixels: their median
-/// width, or their length-weighted median width when that lies farther from `nominal`
-/// (by ratio); `None` for no cable. At the wrong scale the engine also finds stray cables
+/// The width of the cables of `readings` ([`credible`] ones), in working pixels: their
+/// median width, or their length-weighted median width when that lies farther from
+/// `nominal` (by ratio); `None` for no cable. At the wrong scale the engine also finds stray cables
 /// (a walk over superpixels much wider or narrower than the cables), and their measured
 /// widths lean towards the nominal width; with few cables one of them can decide the
 /// plain median (two thin rods measured 3.2 and 9.2 px: the median 9.2 asks for no
 /// correction), so the estimate farther from nominal is the one taken.
-fn measured_width(readings: Vec<Reading>, nominal: f32) -> Option<f64> {
-    let mut widths = credible(readings);
+fn measured_width(mut widths: Vec<Reading>, nominal: f32) -> Option<f64> {
     widths.sort_by(|a, b| a.width.partial_cmp(&b.width).unwrap_or(Ordering::Equal));
     let median = f64::from(widths.get(widths.len() / 2)?.width);
     let half = widths.iter().map(|w| w.length.max(0.0)).sum::<f32>() / 2.0;
@@ -644,10 +645,13 @@ mod tests {
             (3.1, 57.0, 0.03),
             (3.1, 77.0, 0.02),
         ];
-        assert_eq!(measured_width(readings(&scene), 7.8), Some(8.0));
+        assert_eq!(measured_width(credible(readings(&scene)), 7.8), Some(8.0));
         // Scored alike, the strokes are the median.
         let alike = scene.map(|(w, l, _)| (w, l, 0.5));
-        assert_eq!(measured_width(readings(&alike), 7.8), Some(3.1f32.into()));
+        assert_eq!(
+            measured_width(credible(readings(&alike)), 7.8),
+            Some(3.1f32.into())
+        );
     }
 
     #[test]
