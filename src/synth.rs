@@ -319,17 +319,26 @@ impl Case {
 /// 0.45 rad towards the top at 45 px radius (the loop above the line, about
 /// (290, 285)), 220 px on.
 fn curl() -> Vec<[f32; 2]> {
-    let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220.0);
+    let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220);
     let looped = (turn * radius).round() as usize;
-    let mut p = [70.0f32, 330.0];
-    let mut path = vec![p];
-    for i in 0..2 * straight as usize + looped {
-        let along = (i as f32 - straight).clamp(0.0, looped as f32);
-        let heading = -turn * along / looped as f32;
-        p = [p[0] + heading.cos(), p[1] + heading.sin()];
-        path.push(p);
-    }
+    let mut path = turning([70.0, 330.0], 0.0, 0.0, straight);
+    path.extend(turning(path[path.len() - 1], 0.0, -turn, looped).split_off(1));
+    path.extend(turning(path[path.len() - 1], -turn, 0.0, straight).split_off(1));
     path
+}
+
+/// A path in 1 px steps from `from`, `length` steps long, setting off at `heading`
+/// (radians, y pointing down) and turning uniformly by `turn` over its length: a
+/// straight run with no turn, an arc of radius `length / turn` with one.
+pub fn turning(from: [f32; 2], heading: f32, turn: f32, length: usize) -> Vec<[f32; 2]> {
+    let mut p = from;
+    let mut out = vec![p];
+    for i in 0..length {
+        let a = heading + turn * i as f32 / length as f32;
+        p = [p[0] + a.cos(), p[1] + a.sin()];
+        out.push(p);
+    }
+    out
 }
 
 /// A cable to draw: centreline and colour.

@@ -7,7 +7,7 @@ mod common;
 
 use ariadne_dlo::engine::{self, MaskKind, Params, render};
 use ariadne_dlo::eval;
-use ariadne_dlo::synth::{Background, SceneSpec, scene};
+use ariadne_dlo::synth::{Background, SceneSpec, scene, turning};
 
 fn mask_of(seg: &engine::Segmentation, width_px: f32) -> image::GrayImage {
     match render::render_mask(seg, MaskKind::Binary, width_px) {
@@ -618,19 +618,6 @@ fn drawn(cables: Vec<(Vec<[f32; 2]>, [u8; 3])>) -> ariadne_dlo::synth::Scene {
     }
 }
 
-/// A 1 px step polyline from `from`, `length` px at `heading` (radians) turning
-/// uniformly by `turn` over it.
-fn arc(from: [f32; 2], heading: f32, turn: f32, length: usize) -> Vec<[f32; 2]> {
-    let mut p = from;
-    let mut out = vec![p];
-    for i in 0..length {
-        let a = heading + turn * i as f32 / length as f32;
-        p = [p[0] + a.cos(), p[1] + a.sin()];
-        out.push(p);
-    }
-    out
-}
-
 /// A cable with no end in view, crossed 100 px from the frame's right edge by a cable
 /// whose ends are in view, is found from edge to edge where the field fades in the
 /// cells against the frame's edges (as a network's often does). No border seed lies on
@@ -668,9 +655,9 @@ fn a_cable_leaving_the_frame_at_a_grazing_angle_is_found() {
     // Up from below the bottom edge, bending left and back to 10° off the vertical
     // (at (15, 180)), then straight on out of the left edge (at y ≈ 93).
     let (up, slant) = (-std::f32::consts::FRAC_PI_2, 0.17);
-    let mut line = arc([299.0, 560.0], up, -1.2, 250);
-    line.extend(arc(*line.last().unwrap(), up - 1.2, 1.2 - slant, 250).split_off(1));
-    line.extend(arc(*line.last().unwrap(), up - slant, 0.0, 150).split_off(1));
+    let mut line = turning([299.0, 560.0], up, -1.2, 250);
+    line.extend(turning(*line.last().unwrap(), up - 1.2, 1.2 - slant, 250).split_off(1));
+    line.extend(turning(*line.last().unwrap(), up - slant, 0.0, 150).split_off(1));
     let s = drawn(vec![(line, [30, 60, 190])]);
     let (found, err) = with_exact_field(&s, &[]);
     assert_eq!(found, 1);
