@@ -329,8 +329,27 @@ fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Optio
             offset(w as f32 / 2.0),
             offset((band.len() - 1) as f32 - w as f32 / 2.0),
         ],
-        width,
+        width: (outer_span(&fg, lo, hi, w / 2) - separation).min(separation),
     }))
+}
+
+/// The span, pixels, of the band `lo..=hi` of profile contrasts `fg` between its outer
+/// edges, each where the contrast first reaches half the peak of its own cable (the
+/// highest within `reach` samples inside the band), as the refinement reads one
+/// cable's width at half its peak. The band's own ends, where the contrast passes a
+/// share of the whole profile's peak, take in the blur of the photo and of the Lab
+/// image: twins 9-11 px wide read 11.5-12, and a photo of such pairs was shrunk for
+/// them until the pairs ran together (README, "Two cables laid together"). The whole profile's peak
+/// would not do either: between two pale cables their rims meet and outdo the outer
+/// ones.
+fn outer_span(fg: &[f32], lo: usize, hi: usize, reach: usize) -> f32 {
+    let reach = reach.max(1);
+    let peak = |s: &[f32]| s.iter().copied().fold(0.0f32, f32::max);
+    let left = 0.5 * peak(&fg[lo..=(lo + reach).min(hi)]);
+    let right = 0.5 * peak(&fg[hi.saturating_sub(reach).max(lo)..=hi]);
+    let first = (lo..=hi).find(|&i| fg[i] >= left).unwrap_or(lo);
+    let last = (first..=hi).rev().find(|&i| fg[i] >= right).unwrap_or(hi);
+    (last - first + 1) as f32 * STEP
 }
 
 #[cfg(test)]
@@ -396,6 +415,50 @@ mod tests {
         assert_eq!(read_twins(&glossy, 7.8, 0.5), Some(None));
         let plain = profile(&[], TABLE, reach);
         assert_eq!(read_twins(&plain, 7.8, 0.5), None);
+    }
+
+    /// `profile` blurred by a Gaussian `sigma` pixels wide, as a photo and the Lab
+    /// image blur the cables' edges.
+    fn blurred(profile: &[[f32; 3]], sigma: f32) -> Vec<[f32; 3]> {
+        let radius = (3.0 * sigma / STEP).ceil() as i32;
+        let weights: Vec<f32> = (-radius..=radius)
+            .map(|k| (-0.5 * (k as f32 * STEP / sigma).powi(2)).exp())
+            .collect();
+        let total: f32 = weights.iter().sum();
+        let last = profile.len() as i32 - 1;
+        (0..=last)
+            .map(|i| {
+                let mut sum = [0.0; 3];
+                for (k, w) in (-radius..=radius).zip(&weights) {
+                    let s = profile[(i + k).clamp(0, last) as usize];
+                    for c in 0..3 {
+                        sum[c] += w * s[c] / total;
+                    }
+                }
+                sum
+            })
+            .collect()
+    }
+
+    #[test]
+    fn blurred_twins_read_as_wide_as_they_are() {
+        // Red pairs (a darker rim) and a white pair (grey rims, a core of the table's
+        // colour), `width` px each, `gap` px apart, blurred by 1 px: the band's ends read
+        // them 1.5 px wider than they are (the profile's samples add up to 0.5 px).
+        const GREY_RIM: [f32; 3] = [60.0, 0.0, 2.0];
+        let reach = REACH * 7.8;
+        for (core, rim, width, gap) in [
+            (RED, DARK_RED, 9.0, 1.0),
+            (RED, DARK_RED, 10.0, 2.0),
+            (RED, DARK_RED, 11.0, 1.0),
+            (TABLE, GREY_RIM, 8.0, 0.0),
+        ] {
+            let c = (width + gap) / 2.0;
+            let cables = [(-c, width, core, rim), (c, width, core, rim)];
+            let pair = blurred(&profile(&cables, TABLE, reach), 1.0);
+            let t = read_twins(&pair, 7.8, 0.8).unwrap().expect("twins");
+            assert!((t.width - width).abs() <= 0.75, "{width} {gap} {t:?}");
+        }
     }
 
     #[test]
