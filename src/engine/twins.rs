@@ -71,7 +71,9 @@ const MIN_READINGS: usize = 4;
 struct Twins {
     /// The two cables' centres, pixels from the profile's centre along its direction.
     offsets: [f32; 2],
-    /// Their width, pixels.
+    /// Their width, pixels: the band's span between its outer edges ([`outer_span`])
+    /// less their separation, and no more than that separation (side by side, two
+    /// cables do not overlap).
     width: f32,
 }
 
@@ -339,9 +341,9 @@ fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Optio
 /// cable's width at half its peak. The band's own ends, where the contrast passes a
 /// share of the whole profile's peak, take in the blur of the photo and of the Lab
 /// image: twins 9-11 px wide read 11.5-12, and a photo of such pairs was shrunk for
-/// them until the pairs ran together (README, "Two cables laid together"). The whole profile's peak
-/// would not do either: between two pale cables their rims meet and outdo the outer
-/// ones.
+/// them until the pairs ran together (README, "Two cables laid together"). The whole
+/// profile's peak would not do either: between two pale cables their rims meet and
+/// outdo the outer ones.
 fn outer_span(fg: &[f32], lo: usize, hi: usize, reach: usize) -> f32 {
     let reach = reach.max(1);
     let peak = |s: &[f32]| s.iter().copied().fold(0.0f32, f32::max);
@@ -443,8 +445,9 @@ mod tests {
     #[test]
     fn blurred_twins_read_as_wide_as_they_are() {
         // Red pairs (a darker rim) and a white pair (grey rims, a core of the table's
-        // colour), `width` px each, `gap` px apart, blurred by 1 px: the band's ends read
-        // them 1.5 px wider than they are (the profile's samples add up to 0.5 px).
+        // colour), `width` px each, `gap` px apart, blurred by 1 px. The band's ends read
+        // them 1.5 px wider than they are; the outer edges, 0.5 px (this profile's
+        // sampling: it takes a sample on each cable's edge).
         const GREY_RIM: [f32; 3] = [60.0, 0.0, 2.0];
         let reach = REACH * 7.8;
         for (core, rim, width, gap) in [
