@@ -54,13 +54,13 @@ pub(super) fn border_crossing_cables(
         Some(f) => (Evidence::Field(f), p.field_border_min_score),
         None => (Evidence::Colour(graph), p.border_min_score),
     };
-    let seeds = border_seeds(evidence, sp, &covered, p);
-    let mut found = cables_from(scene, &seeds, &covered, min_score, false)?;
+    let (seeds, targets) = border_seeds(evidence, sp, &covered, p);
+    let mut found = cables_from(scene, (&seeds, targets), &covered, min_score, false)?;
     if let Some(vertex_field) = terrain.field {
         cover(&mut covered, graph, &found.walks, &found.picked);
         let frame = (sp.step, [sp.width, sp.height]);
         let seeds = orphan_seeds(graph, vertex_field, &covered, frame, p);
-        let orphans = cables_from(scene, &seeds, &covered, min_score, true)?;
+        let orphans = cables_from(scene, (&seeds, seeds.len()), &covered, min_score, true)?;
         // A pale cable can be walked a superpixel beside it, leaving pieces of field
         // along it that its walk does not cover: a cable over them repeats it.
         let repeats = |c: &Cable| {
@@ -99,7 +99,8 @@ struct SeedCables {
     picked: Vec<Pairing>,
 }
 
-/// The cables walked from `seeds` that reach the border or another seed over mostly
+/// The cables walked from `seeds` that reach the border or another seed (one of the
+/// first `targets`) over mostly
 /// uncovered superpixels, score at least `min_score` (with a field, a walk along which
 /// it is sure, `field_border_sure_level`, only the floor of any cable), read as a ridge
 /// rather than a step between two backgrounds across at least `min_ridge_share` of
@@ -113,7 +114,7 @@ struct SeedCables {
 /// left the frame ([`extend`]).
 fn cables_from(
     scene: &Scene<'_>,
-    seeds: &[Seed],
+    (seeds, targets): (&[Seed], usize),
     covered: &[bool],
     min_score: f32,
     chained: bool,
@@ -135,7 +136,7 @@ fn cables_from(
     };
     // Border and piece seeds are no cable's ends, so a cable running on behind one
     // tells nothing (`pair` below gets a through factor of 1): not read.
-    let walks = walk::walk_all(terrain, seeds, false)?;
+    let walks = walk::walk_all(terrain, seeds, targets, false)?;
     // Chaining links pieces with any walk, so only then are all of them kept.
     let (crossing, links): (Vec<Walk>, Vec<Walk>) = if chained {
         (
@@ -224,14 +225,15 @@ pub enum Evidence<'a> {
     Field(&'a CableField),
 }
 
-/// Seeds on the border where an unexplained cable may cross it, by `evidence`;
-/// `covered[v]` marks the superpixels already explained by a cable.
+/// Seeds on the border where an unexplained cable may cross it, by `evidence`, and how
+/// many of them (the first) a walk may end at ([`seeds_where`]); `covered[v]` marks
+/// the superpixels already explained by a cable.
 pub fn border_seeds(
     evidence: Evidence<'_>,
     sp: &Superpixels,
     covered: &[bool],
     params: &Params,
-) -> Vec<Seed> {
+) -> (Vec<Seed>, usize) {
     seeds_where(sp, params, |ring, labels| {
         let cable: Vec<bool> = match evidence {
             Evidence::Colour(graph) => {
@@ -264,26 +266,35 @@ pub fn border_seeds(
 
 /// One seed in the middle of every run of perimeter pixels that `stands_out` marks
 /// (given the ring and each ring pixel's superpixel), when the run is as long as a
-/// cable crossing (`border_min_crossing_px` ..= `border_max_crossing_px`). A run may
-/// wrap past the ring's start.
+/// cable crossing (`border_min_crossing_px` ..= `border_max_crossing_px`), and after
+/// those, one in each run up to `border_max_start_px` long; returns the seeds and how
+/// many are crossings. A run may wrap past the ring's start. A cable crossing at a
+/// grazing angle, or through a corner, stands out along more of the border than one
+/// crossing it squarely, and its crossing lies somewhere along the run rather than in
+/// its middle: walks start there, but a walk reaching the run ends on the border
+/// itself, not at its middle (README, "A grazing crossing of the border").
 fn seeds_where(
     sp: &Superpixels,
     params: &Params,
     stands_out: impl FnOnce(&[[usize; 2]], &[u32]) -> Vec<bool>,
-) -> Vec<Seed> {
+) -> (Vec<Seed>, usize) {
     let (w, h) = (sp.width, sp.height);
     if w < 3 || h < 3 {
-        return Vec::new();
+        return (Vec::new(), 0);
     }
     let ring = perimeter(w, h);
     let labels: Vec<u32> = ring.iter().map(|&[x, y]| sp.labels[y * w + x]).collect();
     let stands_out = stands_out(&ring, &labels);
     let n = ring.len();
     let Some(start) = (0..n).find(|&i| !stands_out[i]) else {
-        return Vec::new();
+        return (Vec::new(), 0);
     };
-    let crossing = params.border_min_crossing_px as usize..=params.border_max_crossing_px as usize;
+    let (shortest, longest) = (
+        params.border_min_crossing_px as usize,
+        params.border_max_crossing_px as usize,
+    );
     let mut seeds = Vec::new();
+    let mut starts = Vec::new();
     let mut i = 0;
     while i < n {
         if !stands_out[(start + i) % n] {
@@ -291,17 +302,24 @@ fn seeds_where(
             continue;
         }
         let run = (i..n).take_while(|&j| stands_out[(start + j) % n]).count();
-        if crossing.contains(&run) {
+        if run >= shortest && run <= (params.border_max_start_px as usize).max(longest) {
             let mid = (start + i + run / 2) % n;
             let [x, y] = ring[mid];
-            seeds.push(Seed {
+            let seed = Seed {
                 point: [x as f32, y as f32],
                 vertex: labels[mid],
-            });
+            };
+            if run <= longest {
+                seeds.push(seed);
+            } else {
+                starts.push(seed);
+            }
         }
         i += run;
     }
-    seeds
+    let crossings = seeds.len();
+    seeds.extend(starts);
+    (seeds, crossings)
 }
 
 #[cfg(test)]
@@ -343,13 +361,13 @@ mod tests {
         );
         let graph = Graph::build(&sp, &rgb, &lab, 4);
         let p = Params::default();
-        let seeds = border_seeds(Evidence::Colour(&graph), &sp, &vec![false; graph.len()], &p);
-        assert_eq!(seeds.len(), 2, "{seeds:?}");
+        let (seeds, crossings) =
+            border_seeds(Evidence::Colour(&graph), &sp, &vec![false; graph.len()], &p);
+        assert_eq!((seeds.len(), crossings), (2, 2), "{seeds:?}");
         assert!(seeds.iter().all(|s| (44.0..52.0).contains(&s.point[0])));
         // Once the stripe is explained, nothing is left to seed.
-        assert!(
-            border_seeds(Evidence::Colour(&graph), &sp, &vec![true; graph.len()], &p).is_empty()
-        );
+        let (none, _) = border_seeds(Evidence::Colour(&graph), &sp, &vec![true; graph.len()], &p);
+        assert!(none.is_empty());
     }
 
     #[test]
@@ -379,10 +397,38 @@ mod tests {
         };
         let p = Params::default();
         let uncovered = vec![false; sp.count];
-        let seeds = border_seeds(Evidence::Field(&field), &sp, &uncovered, &p);
-        assert_eq!(seeds.len(), 2, "{seeds:?}");
+        let (seeds, crossings) = border_seeds(Evidence::Field(&field), &sp, &uncovered, &p);
+        assert_eq!((seeds.len(), crossings), (2, 2), "{seeds:?}");
         assert!(seeds.iter().all(|s| (36.0..52.0).contains(&s.point[0])));
         let graph = Graph::build(&sp, &vec![200u8; w * h * 3], &lab, 4);
-        assert!(border_seeds(Evidence::Colour(&graph), &sp, &uncovered, &p).is_empty());
+        let (none, _) = border_seeds(Evidence::Colour(&graph), &sp, &uncovered, &p);
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn a_longer_run_starts_walks_but_ends_none() {
+        // Runs along the top edge of 20 px (a cable crossing it), 50 px (one crossing at
+        // a grazing angle) and 100 px (something lying along the edge).
+        let (w, h) = (320usize, 60usize);
+        let lab = LabImage::from_rgb(&vec![200u8; w * h * 3], w, h);
+        let sp = slic(
+            &lab,
+            &SlicSettings {
+                n_segments: 100,
+                compactness: 10.0,
+                iterations: 3,
+                min_size_factor: 0.25,
+            },
+        );
+        let p = Params::default();
+        let runs = [(10, 30), (60, 110), (150, 250)];
+        let (seeds, crossings) = seeds_where(&sp, &p, |ring, _| {
+            ring.iter()
+                .map(|&[x, y]| y == 0 && runs.iter().any(|&(a, b)| (a..b).contains(&x)))
+                .collect()
+        });
+        assert_eq!(crossings, 1, "{seeds:?}");
+        let xs: Vec<f32> = seeds.iter().map(|s| s.point[0]).collect();
+        assert_eq!(xs, [20.0, 85.0], "{seeds:?}");
     }
 }

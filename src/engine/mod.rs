@@ -256,7 +256,12 @@ pub fn segment_oversegmented(
             }
         })
         .collect();
-    let walks = walk::walk_all(terrain, &seeds, params.field_through_factor < 1.0)?;
+    let walks = walk::walk_all(
+        terrain,
+        &seeds,
+        seeds.len(),
+        params.field_through_factor < 1.0,
+    )?;
     let chosen = pairing::pair(
         &walks,
         confidence,

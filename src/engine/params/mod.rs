@@ -255,6 +255,10 @@ pub struct Params {
     pub border_min_crossing_px: u32,
     /// Longest run taken as a crossing (longer runs are objects along the border).
     pub border_max_crossing_px: u32,
+    /// Longest run from which walks still start, though none ends there: a cable
+    /// crossing the border at a grazing angle, or leaving through a corner, stands out
+    /// along more of it (README, "A grazing crossing of the border").
+    pub border_max_start_px: u32,
     /// A border seed counts as this sure as a given end.
     pub border_seed_confidence: f32,
     /// Lowest score of a cable found from border seeds alone.
@@ -451,6 +455,7 @@ impl Default for Params {
             border_min_contrast: 20.0,
             border_min_crossing_px: 3,
             border_max_crossing_px: 40,
+            border_max_start_px: 60,
             border_seed_confidence: 0.5,
             border_min_score: 0.35,
             border_min_steps: 5.0,

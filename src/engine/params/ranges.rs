@@ -95,6 +95,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("border_min_contrast", 0.0, 200.0),
     ("border_min_crossing_px", 1.0, 10_000.0),
     ("border_max_crossing_px", 1.0, 10_000.0),
+    ("border_max_start_px", 1.0, 10_000.0),
     ("border_seed_confidence", 0.0, 1.0),
     ("border_min_score", 0.0, 1.0),
     ("border_min_steps", 0.0, 1000.0),

@@ -149,17 +149,19 @@ pub struct Terrain<'a> {
     pub deadline: Deadline,
 }
 
-/// Runs all walks from all seeds; `read_through` says whether to read
+/// Runs all walks from all seeds; a walk may end at any of the first `targets` seeds
+/// but its own (the rest only start walks); `read_through` says whether to read
 /// [`Walk::through`] (false leaves it false: where the seeds are no cable's ends, or
 /// nothing reads it).
 pub fn walk_all(
     terrain: Terrain<'_>,
     seeds: &[Seed],
+    targets: usize,
     read_through: bool,
 ) -> Result<Vec<Walk>, EngineError> {
     let graph = terrain.graph;
     let deadline = terrain.deadline;
-    let mut walker = Walker::new(terrain, seeds);
+    let mut walker = Walker::new(terrain, seeds, targets);
     let mut walks = Vec::new();
     let near_px = terrain.params.seed_region_steps * terrain.step_px;
     for (s, seed) in seeds.iter().enumerate() {
@@ -252,6 +254,8 @@ struct Walker<'a> {
     field: Option<&'a [VertexField]>,
     field_map: Option<&'a CableField>,
     seeds: &'a [Seed],
+    /// How many of `seeds` (the first) a walk may end at.
+    targets: usize,
     params: &'a Params,
     /// Lateral offset at which contrast is sampled: one superpixel step.
     side_px: f32,
@@ -264,7 +268,7 @@ struct Walker<'a> {
 }
 
 impl<'a> Walker<'a> {
-    fn new(terrain: Terrain<'a>, seeds: &'a [Seed]) -> Self {
+    fn new(terrain: Terrain<'a>, seeds: &'a [Seed], targets: usize) -> Self {
         let Terrain {
             graph,
             lab,
@@ -280,6 +284,7 @@ impl<'a> Walker<'a> {
             field,
             field_map,
             seeds,
+            targets,
             params,
             side_px: step_px,
             hood: Neighbourhood::default(),
@@ -501,6 +506,7 @@ impl<'a> Walker<'a> {
                 .seeds
                 .iter()
                 .enumerate()
+                .take(self.targets)
                 .filter(|&(t, _)| t != s)
                 .map(|(t, seed)| (t, dist(seed.point, here)))
                 .filter(|&(_, d)| d <= p.close_radius_px)
@@ -539,6 +545,7 @@ impl<'a> Walker<'a> {
             .seeds
             .iter()
             .enumerate()
+            .take(self.targets)
             .filter(|&(t, _)| t != s)
             .filter_map(|(t, seed)| {
                 let v = [seed.point[0] - here[0], seed.point[1] - here[1]];
@@ -622,7 +629,7 @@ mod tests {
         params: &Params,
     ) -> Vec<Walk> {
         on_a_line(line, cable, params, |terrain| {
-            walk_all(terrain, seeds, true).unwrap()
+            walk_all(terrain, seeds, seeds.len(), true).unwrap()
         })
     }
 
@@ -713,7 +720,7 @@ mod tests {
             |_| 0.0,
             &p,
             |terrain| {
-                let walker = Walker::new(terrain, &seeds);
+                let walker = Walker::new(terrain, &seeds, seeds.len());
                 let w = p.nominal_width_px;
                 // 0.8 of a cable width from the right edge (x = 199), heading up and 4° into
                 // the frame: centroids against an edge read so where a cable runs out along
