@@ -370,21 +370,25 @@ mod tests {
         assert!(none.is_empty());
     }
 
+    /// A plain grey `w` x `h` image in Lab and its superpixels (about `n` of them).
+    fn plain(w: usize, h: usize, n: u32) -> (LabImage, Superpixels) {
+        let lab = LabImage::from_rgb(&vec![200u8; w * h * 3], w, h);
+        let settings = SlicSettings {
+            n_segments: n,
+            compactness: 10.0,
+            iterations: 5,
+            min_size_factor: 0.25,
+        };
+        let sp = slic(&lab, &settings);
+        (lab, sp)
+    }
+
     #[test]
     fn a_field_cable_crossing_the_frame_gives_two_border_seeds() {
         // The field sees a vertical cable in grid column 5 (x 40..48) from top to bottom;
         // the image itself is plain, so colour alone would see nothing.
         let (w, h) = (96usize, 72usize);
-        let lab = LabImage::from_rgb(&vec![200u8; w * h * 3], w, h);
-        let sp = slic(
-            &lab,
-            &SlicSettings {
-                n_segments: 150,
-                compactness: 10.0,
-                iterations: 5,
-                min_size_factor: 0.25,
-            },
-        );
+        let (lab, sp) = plain(w, h, 150);
         let (gw, gh) = (w / 8, h / 8);
         let field = CableField {
             width: gw,
@@ -409,17 +413,7 @@ mod tests {
     fn a_longer_run_starts_walks_but_ends_none() {
         // Runs along the top edge of 20 px (a cable crossing it), 50 px (one crossing at
         // a grazing angle) and 100 px (something lying along the edge).
-        let (w, h) = (320usize, 60usize);
-        let lab = LabImage::from_rgb(&vec![200u8; w * h * 3], w, h);
-        let sp = slic(
-            &lab,
-            &SlicSettings {
-                n_segments: 100,
-                compactness: 10.0,
-                iterations: 3,
-                min_size_factor: 0.25,
-            },
-        );
+        let (_, sp) = plain(320, 60, 100);
         let p = Params::default();
         let runs = [(10, 30), (60, 110), (150, 250)];
         let (seeds, crossings) = seeds_where(&sp, &p, |ring, _| {
