@@ -100,14 +100,13 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed (one of the
-/// first `targets`) over mostly
-/// uncovered superpixels, score at least `min_score` (with a field, a walk along which
-/// it is sure, `field_border_sure_level`, only the floor of any cable), read as a ridge
-/// rather than a step between two backgrounds across at least `min_ridge_share` of
-/// their profiles, and do not lie all along one side of the frame, within
-/// `border_margin_px` of it: the frame cuts whatever runs there (a board's edge, a
-/// tray's rim, a strip of table), so its profiles cannot be read, and a cable that
-/// close along a whole side would be mostly out of view.
+/// first `targets`) over mostly uncovered superpixels, score at least `min_score`
+/// (with a field, a walk along which it is sure, `field_border_sure_level`, only the
+/// floor of any cable), read as a ridge rather than a step between two backgrounds
+/// across at least `min_ridge_share` of their profiles, and do not lie all along one
+/// side of the frame, within `border_margin_px` of it: the frame cuts whatever runs
+/// there (a board's edge, a tray's rim, a strip of table), so its profiles cannot be
+/// read, and a cable that close along a whole side would be mostly out of view.
 /// With `chained`, the seeds are no cable's ends (the ends of the field's pieces): the
 /// cables found are chained through them into whole ones ([`chain`]) and, with
 /// `field_orphan_run_on`, run on past them where a walk lost the cable further on or
@@ -293,6 +292,7 @@ fn seeds_where(
         params.border_min_crossing_px as usize,
         params.border_max_crossing_px as usize,
     );
+    let longest_start = (params.border_max_start_px as usize).max(longest);
     let mut seeds = Vec::new();
     let mut starts = Vec::new();
     let mut i = 0;
@@ -302,7 +302,7 @@ fn seeds_where(
             continue;
         }
         let run = (i..n).take_while(|&j| stands_out[(start + j) % n]).count();
-        if run >= shortest && run <= (params.border_max_start_px as usize).max(longest) {
+        if (shortest..=longest_start).contains(&run) {
             let mid = (start + i + run / 2) % n;
             let [x, y] = ring[mid];
             let seed = Seed {
