@@ -12,15 +12,23 @@
 //! Two lost walks from different ends whose heads face each other across a short gap
 //! (a crossing or a glare spot they could not pass) are joined into one hypothesis
 //! between their ends. So are two walks that leave the frame facing each other across
-//! a short gap along which the cable field shows cable: a cable that grazes the border
-//! (as well supported as a confirmed pair: each walk found the other's way out), not
-//! one that leaves the frame and comes back.
+//! a short gap along which the cable field shows cable, each meeting it at a shallow
+//! angle: a cable that grazes the border (as well supported as a confirmed pair: each
+//! walk found the other's way out), not one that leaves the frame and comes back. Where
+//! both walks were accepted as cables leaving the frame, their join replaces them.
 
 use super::Params;
 use super::field::{CableField, GAP_SAMPLE_PX};
 use super::geometry::norm;
 use super::spline::resample;
 use super::walk::{Walk, WalkEnd};
+
+/// Two walks that leave the frame are joined only where each meets the gap between
+/// their exits within this many degrees (and `max_turn_deg`): a cable grazing the border
+/// runs along it there (28° and 18° on simple/00039's orange cable), while two cables
+/// leaving the frame a little apart, converging, meet it steeper (48-59° where they were
+/// joined at `max_turn_deg`, 60°).
+const GRAZE_MAX_TURN_DEG: f32 = 40.0;
 
 /// How an accepted cable's far end was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -101,7 +109,9 @@ impl Floor {
 /// A hypothesis whose walks run more than `pair_max_shared` of their superpixels over
 /// those of hypotheses accepted before it repeats a cable already found and is
 /// dropped. A walk that closes on an end after fewer than `close_min_steps` steps
-/// ([`Walk::steps`]) is no hypothesis. The result is ordered by decreasing score.
+/// ([`Walk::steps`]) is no hypothesis. Two cables accepted as leaving the frame where
+/// the border walks they rest on join ([`merge_grazes`]) are one. The result is ordered
+/// by decreasing score.
 pub fn pair(
     walks: &[Walk],
     confidence: &[f32],
@@ -145,6 +155,11 @@ pub fn pair(
     hypotheses.extend(joins(walks, confidence, params, field, &passing));
     hypotheses.retain(|h| h.score >= floor.of(h, walks, confidence));
     hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let grazing: Vec<Pairing> = hypotheses
+        .iter()
+        .filter(|h| h.joined.is_some() && walks[h.walk].end == WalkEnd::Border)
+        .copied()
+        .collect();
     let mut used = vec![false; n_seeds];
     let mut taken = vec![false; vertex_count(walks)];
     let mut accepted = Vec::new();
@@ -173,7 +188,31 @@ pub fn pair(
         }
         accepted.push(h);
     }
+    merge_grazes(&mut accepted, &grazing);
     accepted
+}
+
+/// Replaces two accepted cables that each leave the frame, by walks that a grazing
+/// join of `grazing` links, with that join: one cable that runs along the border
+/// between their exits (the field shows it there), not two that leave it. The join
+/// scores the geometric mean of its walks, so the better walk leaving the frame alone
+/// can outscore it (with `border_factor` 0.9, once one walk's quality is under 0.81 of
+/// the other's); both being accepted shows neither end found a better cable.
+fn merge_grazes(accepted: &mut Vec<Pairing>, grazing: &[Pairing]) {
+    for join in grazing {
+        let Some(j) = join.joined else { continue };
+        let leaving = |walk: usize| {
+            accepted
+                .iter()
+                .position(|a| a.walk == walk && a.far == FarEnd::Border && a.joined.is_none())
+        };
+        let (Some(a), Some(b)) = (leaving(join.walk), leaving(j)) else {
+            continue;
+        };
+        accepted[a] = *join;
+        accepted.remove(b);
+    }
+    accepted.sort_by(|a, b| b.score.total_cmp(&a.score));
 }
 
 /// One more than the largest superpixel index any of `walks` visits.
@@ -224,6 +263,11 @@ fn joins(
             if d > params.join_radius_px {
                 continue;
             }
+            let cos_max = if a.end == WalkEnd::Border {
+                cos_max.max(GRAZE_MAX_TURN_DEG.to_radians().cos())
+            } else {
+                cos_max
+            };
             let facing = if d < 1e-3 {
                 -(a.end_heading[0] * b.end_heading[0] + a.end_heading[1] * b.end_heading[1])
                     >= cos_max
@@ -426,6 +470,36 @@ mod tests {
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         assert_eq!(got[0].score, walks[0].quality(&p));
+        // One walk much better than the other: leaving the frame, it alone would
+        // outscore the join (0.9 · 0.89 against √(0.89 · 0.4)), but the two are one cable.
+        let mut uneven = walks.clone();
+        uneven[1].visual = 0.16;
+        let got = pair(
+            &uneven,
+            &[1.0; 2],
+            &p,
+            Floor::new(p.min_cable_score),
+            1.0,
+            Some(&grazing),
+        );
+        assert_eq!(got.len(), 1, "{got:?}");
+        assert_eq!((got[0].start, got[0].joined), (0, Some(1)));
+        // Two cables leaving the frame close together, converging (each meeting the
+        // border at 55°), are two, though the field shows cable between their exits.
+        let mut steep = walks.clone();
+        for w in &mut steep {
+            w.end_heading = [0.57 * w.end_heading[0].signum(), 0.82];
+        }
+        let got = pair(
+            &steep,
+            &[1.0; 2],
+            &p,
+            Floor::new(p.min_cable_score),
+            1.0,
+            Some(&grazing),
+        );
+        assert_eq!(got.len(), 2, "{got:?}");
+        assert!(got.iter().all(|h| h.far == FarEnd::Border));
         // Background between the exits (the cable left the frame), or no field: two
         // cables, each through the border.
         let left = field(0.0);
