@@ -455,9 +455,9 @@ mod tests {
                 .collect(),
             orientation: vec![[1.0, 0.0]; 200],
         };
-        let pair_over = |field| {
+        let pair_over = |walks: &[Walk], field| {
             pair(
-                &walks,
+                walks,
                 &[1.0; 2],
                 &p,
                 Floor::new(p.min_cable_score),
@@ -466,7 +466,7 @@ mod tests {
             )
         };
         let grazing = field(0.9);
-        let got = pair_over(Some(&grazing));
+        let got = pair_over(&walks, Some(&grazing));
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].far, got[0].joined), (FarEnd::Seed(1), Some(1)));
         assert_eq!(got[0].score, walks[0].quality(&p));
@@ -474,14 +474,7 @@ mod tests {
         // outscore the join (0.9 · 0.89 against √(0.89 · 0.4)), but the two are one cable.
         let mut uneven = walks.clone();
         uneven[1].visual = 0.16;
-        let got = pair(
-            &uneven,
-            &[1.0; 2],
-            &p,
-            Floor::new(p.min_cable_score),
-            1.0,
-            Some(&grazing),
-        );
+        let got = pair_over(&uneven, Some(&grazing));
         assert_eq!(got.len(), 1, "{got:?}");
         assert_eq!((got[0].start, got[0].joined), (0, Some(1)));
         // Two cables leaving the frame close together, converging (each meeting the
@@ -490,21 +483,14 @@ mod tests {
         for w in &mut steep {
             w.end_heading = [0.57 * w.end_heading[0].signum(), 0.82];
         }
-        let got = pair(
-            &steep,
-            &[1.0; 2],
-            &p,
-            Floor::new(p.min_cable_score),
-            1.0,
-            Some(&grazing),
-        );
+        let got = pair_over(&steep, Some(&grazing));
         assert_eq!(got.len(), 2, "{got:?}");
         assert!(got.iter().all(|h| h.far == FarEnd::Border));
         // Background between the exits (the cable left the frame), or no field: two
         // cables, each through the border.
         let left = field(0.0);
         for field in [Some(&left), None] {
-            let got = pair_over(field);
+            let got = pair_over(&walks, field);
             assert_eq!(got.len(), 2);
             assert!(got.iter().all(|h| h.far == FarEnd::Border));
         }
