@@ -232,6 +232,7 @@ mod tests {
             end_heading: [1.0, 0.0],
             end_point: [0.0, 0.0],
             through: false,
+            opening: 1.0,
         }
     }
 

@@ -256,12 +256,7 @@ pub fn segment_oversegmented(
             }
         })
         .collect();
-    let walks = walk::walk_all(
-        terrain,
-        &seeds,
-        seeds.len(),
-        params.field_through_factor < 1.0,
-    )?;
+    let walks = walk::walk_all(terrain, &seeds, seeds.len(), true)?;
     let chosen = pairing::pair(
         &walks,
         confidence,

@@ -330,6 +330,11 @@ pub struct Params {
     /// tip pushed against it), has its hypothesis score multiplied by this (README,
     /// "How the engine uses the field"). 1: no such rule.
     pub field_through_factor: f32,
+    /// Weight w of how a walk from an end opens along the field's direction at the end:
+    /// its quality is multiplied by 1 − w + w·a, a the agreement of its opening way with
+    /// that direction ([`crate::engine::walk::Walk::opening`]; README, "How the engine
+    /// uses the field"). 0: no such term.
+    pub field_opening_weight: f32,
     /// Exponent of the walk's mean cable probability in its quality.
     pub quality_field_exponent: f32,
     /// Cable probability from which a point counts as on a cable (centreline share,
@@ -473,6 +478,7 @@ impl Default for Params {
             field_collar_head: 0.5,
             field_close_min_alignment: 0.25,
             field_through_factor: 0.5,
+            field_opening_weight: 0.15,
             quality_field_exponent: 1.0,
             field_level: 0.3,
             field_min_share: 0.15,

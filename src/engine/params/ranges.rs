@@ -111,6 +111,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_collar_head", 0.0, 1.0),
     ("field_close_min_alignment", 0.0, 1.0),
     ("field_through_factor", 0.0, 1.0),
+    ("field_opening_weight", 0.0, 1.0),
     ("quality_field_exponent", 0.0, 10.0),
     ("field_level", 0.0, 1.0),
     ("field_min_share", 0.0, 1.0),

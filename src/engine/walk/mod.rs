@@ -106,9 +106,17 @@ pub struct Walk {
     pub end_point: [f32; 2],
     /// Whether the cable it follows runs on behind its seed (see
     /// [`Walker::runs_on_behind`]): the walk follows a cable that passes the end, not
-    /// the end's own cable. Always false without a field, and where [`walk_all`] is
-    /// not asked to read it.
+    /// the end's own cable. Always false without a field, where the seeds are no
+    /// cable's ends, and with `field_through_factor` 1 (nothing reads it).
     pub through: bool,
+    /// How the walk opens along the field's direction at its end, as a factor of its
+    /// quality: 1 − w + w·a, where a is the agreement ([`alignment`]) of the way from
+    /// the seed to the walk's first point `OPENING_STEPS` superpixel steps out with
+    /// the field's direction at the seed, and w is `field_opening_weight`. At a
+    /// terminal the field runs along the end's own cable; a walk opening across it
+    /// has stepped onto a cable the end lies against. 1 without a field and where the
+    /// seeds are no cable's ends.
+    pub opening: f32,
 }
 
 impl Walk {
@@ -118,14 +126,15 @@ impl Walk {
         self.vertices.len().saturating_sub(2)
     }
 
-    /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b · `cable`^c,
-    /// with a = `quality_visual_exponent` (0.5 by default), b =
+    /// Overall quality in 0..=1: `visual`^a · `smoothness` · `contrast`^b · `cable`^c ·
+    /// `opening`, with a = `quality_visual_exponent` (0.5 by default), b =
     /// `quality_contrast_exponent` (2) and c = `quality_field_exponent` (1).
     pub fn quality(&self, params: &Params) -> f32 {
         self.visual.powf(params.quality_visual_exponent)
             * self.smoothness
             * self.contrast.powf(params.quality_contrast_exponent)
             * self.cable.powf(params.quality_field_exponent)
+            * self.opening
     }
 }
 
@@ -150,14 +159,14 @@ pub struct Terrain<'a> {
 }
 
 /// Runs all walks from all seeds; a walk may end at any of the first `targets` seeds
-/// but its own (the rest only start walks); `read_through` says whether to read
-/// [`Walk::through`] (false leaves it false: where the seeds are no cable's ends, or
-/// nothing reads it).
+/// but its own (the rest only start walks); `from_ends` says whether the seeds are
+/// cable ends, for which [`Walk::through`] and [`Walk::opening`] are read (false
+/// leaves them false and 1: border seeds and the ends of pieces of the field).
 pub fn walk_all(
     terrain: Terrain<'_>,
     seeds: &[Seed],
     targets: usize,
-    read_through: bool,
+    from_ends: bool,
 ) -> Result<Vec<Walk>, EngineError> {
     let graph = terrain.graph;
     let deadline = terrain.deadline;
@@ -168,7 +177,7 @@ pub fn walk_all(
         let (region, firsts) = seed_region(graph, seed, near_px);
         for first in firsts {
             deadline.check()?;
-            if let Some(w) = walker.run(s, &region, first, read_through) {
+            if let Some(w) = walker.run(s, &region, first, from_ends) {
                 walks.push(w);
             }
         }
@@ -301,8 +310,8 @@ impl<'a> Walker<'a> {
     }
 
     /// One walk from seed `s` (whose region is `region`) whose first step goes to
-    /// `first`; `read_through` as for [`walk_all`].
-    fn run(&mut self, s: usize, region: &[u32], first: u32, read_through: bool) -> Option<Walk> {
+    /// `first`; `from_ends` as for [`walk_all`].
+    fn run(&mut self, s: usize, region: &[u32], first: u32, from_ends: bool) -> Option<Walk> {
         let p = self.params;
         let seed = self.seeds[s];
         self.walk_id += 1;
@@ -390,7 +399,14 @@ impl<'a> Walker<'a> {
             WalkEnd::Border => self.exit(head, end_heading).unwrap_or(head),
             _ => head,
         };
-        let through = read_through && self.runs_on_behind(seed.point, &points, &vertices);
+        let through = from_ends
+            && p.field_through_factor < 1.0
+            && self.runs_on_behind(seed.point, &points, &vertices);
+        let opening = if from_ends {
+            self.opening(seed.point, &points)
+        } else {
+            1.0
+        };
         Some(Walk {
             end_heading,
             end_point,
@@ -403,7 +419,34 @@ impl<'a> Walker<'a> {
             cable: cable_sum / (vertices.len() - 1) as f32,
             length_px: length,
             vertices,
+            opening,
         })
+    }
+
+    /// [`Walk::opening`] of a walk from an end at `seed` through `points`.
+    fn opening(&self, seed: [f32; 2], points: &[[f32; 2]]) -> f32 {
+        let Some(field) = self.field_map else {
+            return 1.0;
+        };
+        let reach = OPENING_STEPS * self.side_px;
+        let Some(&out) = points
+            .iter()
+            .find(|&&q| dist(q, seed) >= reach)
+            .or(points.last())
+        else {
+            return 1.0;
+        };
+        let way = [out[0] - seed[0], out[1] - seed[1]];
+        let n = norm(way);
+        if n < 1e-3 {
+            return 1.0;
+        }
+        let agreement = alignment(
+            [way[0] / n, way[1] / n],
+            field.orientation_at(seed[0], seed[1]),
+        );
+        let w = self.params.field_opening_weight;
+        1.0 - w + w * agreement
     }
 
     /// Whether the cable a walk opens along runs on behind its seed: over most of the
@@ -708,19 +751,31 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn a_walk_stopped_against_an_edge_heading_along_it_has_left_the_frame() {
-        let p = Params::default();
+    /// `then` on the terrain of [`on_a_line`] with a walker from one seed, at (30, 30) in
+    /// superpixel 11, and that seed.
+    fn from_one_seed(
+        line: impl Fn(usize) -> u8,
+        cable: impl Fn(usize) -> f32,
+        params: &Params,
+        then: impl FnOnce(Terrain<'_>, &Walker<'_>, &[Seed]),
+    ) {
         let seeds = [Seed {
             point: [30.0, 30.0],
             vertex: 11,
         }];
-        on_a_line(
+        on_a_line(line, cable, params, |terrain| {
+            then(terrain, &Walker::new(terrain, &seeds, seeds.len()), &seeds)
+        })
+    }
+
+    #[test]
+    fn a_walk_stopped_against_an_edge_heading_along_it_has_left_the_frame() {
+        let p = Params::default();
+        from_one_seed(
             |_| 160,
             |_| 0.0,
             &p,
-            |terrain| {
-                let walker = Walker::new(terrain, &seeds, seeds.len());
+            |_, walker, _| {
                 let w = p.nominal_width_px;
                 // 0.8 of a cable width from the right edge (x = 199), heading up and 4° into
                 // the frame: centroids against an edge read so where a cable runs out along
@@ -740,6 +795,29 @@ mod tests {
                     walker.stopped(0, [199.0 - 0.8 * w, 30.0], back),
                     WalkEnd::Lost
                 );
+            },
+        );
+    }
+
+    #[test]
+    fn a_walk_opening_across_the_field_at_its_end_scores_less() {
+        let p = Params::default();
+        from_one_seed(
+            dark_to(200),
+            |_| 1.0,
+            &p,
+            |terrain, walker, seeds| {
+                // The field runs along the row: a way out along it keeps the walk's quality;
+                // one across it (onto a cable the end lies against) loses the weight.
+                let seed = seeds[0].point;
+                let along = walker.opening(seed, &[seed, [50.0, 30.0], [72.0, 31.0]]);
+                let across = walker.opening(seed, &[seed, [31.0, 50.0], [30.0, 72.0]]);
+                assert!((along - 1.0).abs() < 1e-3, "{along}");
+                let w = p.field_opening_weight;
+                assert!(w > 0.0 && (across - (1.0 - w)).abs() < 1e-3, "{across}");
+                // Seeds that are no cable's ends get no such factor.
+                let walks = walk_all(terrain, seeds, seeds.len(), false).unwrap();
+                assert!(!walks.is_empty() && walks.iter().all(|w| w.opening == 1.0));
             },
         );
     }
