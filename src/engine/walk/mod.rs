@@ -423,57 +423,40 @@ impl<'a> Walker<'a> {
         })
     }
 
+    /// The unit direction a walk from `seed` through `points` opens along: from the
+    /// seed to its first point `OPENING_STEPS` superpixel steps out (its last point if
+    /// none is that far); `None` where that point is the seed.
+    fn opening_direction(&self, seed: [f32; 2], points: &[[f32; 2]]) -> Option<[f32; 2]> {
+        let reach = OPENING_STEPS * self.side_px;
+        let &out = points
+            .iter()
+            .find(|q| dist(**q, seed) >= reach)
+            .or(points.last())?;
+        let d = dist(out, seed);
+        (d >= 1e-3).then(|| [(out[0] - seed[0]) / d, (out[1] - seed[1]) / d])
+    }
+
     /// [`Walk::opening`] of a walk from an end at `seed` through `points`.
     fn opening(&self, seed: [f32; 2], points: &[[f32; 2]]) -> f32 {
-        let Some(field) = self.field_map else {
+        let (Some(field), Some(u)) = (self.field_map, self.opening_direction(seed, points)) else {
             return 1.0;
         };
-        let reach = OPENING_STEPS * self.side_px;
-        let Some(&out) = points
-            .iter()
-            .find(|&&q| dist(q, seed) >= reach)
-            .or(points.last())
-        else {
-            return 1.0;
-        };
-        let way = [out[0] - seed[0], out[1] - seed[1]];
-        let n = norm(way);
-        if n < 1e-3 {
-            return 1.0;
-        }
-        let agreement = alignment(
-            [way[0] / n, way[1] / n],
-            field.orientation_at(seed[0], seed[1]),
-        );
+        let agreement = alignment(u, field.orientation_at(seed[0], seed[1]));
         let w = self.params.field_opening_weight;
         1.0 - w + w * agreement
     }
 
     /// Whether the cable a walk opens along runs on behind its seed: over most of the
     /// samples one to two superpixel steps back from `seed` against the walk's opening
-    /// direction (from the seed to its first point `OPENING_STEPS` steps out), the
-    /// field calls cable (`field_level`), runs along that direction
-    /// (`THROUGH_MIN_ALIGNMENT`) and the photo has the colour of the walk's first
-    /// superpixels (within `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end:
+    /// direction ([`Self::opening_direction`]), the field calls cable (`field_level`),
+    /// runs along that direction (`THROUGH_MIN_ALIGNMENT`) and the photo has the colour
+    /// of the walk's first superpixels (within `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end:
     /// behind it lie its metal tip and the background. A cable that passes the end (one
     /// the end's tip is pushed against) runs on.
     fn runs_on_behind(&self, seed: [f32; 2], points: &[[f32; 2]], vertices: &[u32]) -> bool {
-        let Some(field) = self.field_map else {
+        let (Some(field), Some(u)) = (self.field_map, self.opening_direction(seed, points)) else {
             return false;
         };
-        let reach = OPENING_STEPS * self.side_px;
-        let Some(&out) = points
-            .iter()
-            .find(|q| dist(**q, seed) >= reach)
-            .or(points.last())
-        else {
-            return false;
-        };
-        let d = dist(out, seed);
-        if d < 1e-3 {
-            return false;
-        }
-        let u = [(out[0] - seed[0]) / d, (out[1] - seed[1]) / d];
         if self.end_behind(seed, u) {
             return false;
         }
