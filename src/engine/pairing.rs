@@ -7,7 +7,9 @@
 //! belongs to at most one cable and no cable is reported twice: not from its two ends,
 //! nor from two ends on one cable (a terminal seen twice, at its metal tip and where the
 //! insulation ends; a false end along a cable), whose walks run over the same
-//! superpixels.
+//! superpixels. A walk that links two ends over less than a few cable widths most often
+//! joins such a terminal's two marks, or two cables' ends lying side by side: it is
+//! weighed after every other hypothesis, a cable only where its ends have nothing else.
 //!
 //! Two lost walks from different ends whose heads face each other across a short gap
 //! (a crossing or a glare spot they could not pass) are joined into one hypothesis
@@ -109,7 +111,8 @@ impl Floor {
 /// A hypothesis whose walks run more than `pair_max_shared` of their superpixels over
 /// those of hypotheses accepted before it repeats a cable already found and is
 /// dropped. A walk that closes on an end after fewer than `close_min_steps` steps
-/// ([`Walk::steps`]) is no hypothesis. Two cables accepted as leaving the frame where
+/// ([`Walk::steps`]) is no hypothesis; one that closes over less than
+/// `closed_min_length_px` is weighed after all the others. Two cables accepted as leaving the frame where
 /// the border walks they rest on join ([`merge_grazes`]) are one. The result is ordered
 /// by decreasing score.
 pub fn pair(
@@ -154,7 +157,13 @@ pub fn pair(
         .collect();
     hypotheses.extend(joins(walks, confidence, params, field, &passing));
     hypotheses.retain(|h| h.score >= floor.of(h, walks, confidence));
-    hypotheses.sort_by(|a, b| b.score.total_cmp(&a.score));
+    // A short link between two ends: taken only by ends nothing else claims.
+    let short = |h: &Pairing| {
+        matches!(h.far, FarEnd::Seed(_))
+            && h.joined.is_none()
+            && walks[h.walk].length_px < params.closed_min_length_px
+    };
+    hypotheses.sort_by(|a, b| short(a).cmp(&short(b)).then(b.score.total_cmp(&a.score)));
     let grazing: Vec<Pairing> = hypotheses
         .iter()
         .filter(|h| h.joined.is_some() && walks[h.walk].end == WalkEnd::Border)
@@ -189,6 +198,7 @@ pub fn pair(
         accepted.push(h);
     }
     merge_grazes(&mut accepted, &grazing);
+    accepted.sort_by(|a, b| b.score.total_cmp(&a.score));
     accepted
 }
 
@@ -398,6 +408,37 @@ mod tests {
         // The paper closes on any end within r.
         let paper = Params::preset("paper").expect("a preset");
         let got = pair_sure(&walks, &paper);
+        assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
+    }
+
+    #[test]
+    fn a_terminal_seen_twice_yields_to_its_cable() {
+        let p = Params::default();
+        // Ends 0 and 1 mark one terminal twice (a ferrule's tip and its base): their
+        // walks close on each other after a step, confirmed both ways, over less than
+        // `closed_min_length_px`, and score above end 1's walk along its cable.
+        let mut short = [
+            walk(0, WalkEnd::Seed(1), 0.9),
+            walk(1, WalkEnd::Seed(0), 0.9),
+        ];
+        for w in &mut short {
+            w.length_px = 0.8 * p.closed_min_length_px;
+        }
+        let mut along = walk(1, WalkEnd::Border, 0.6);
+        along.vertices = (10..20).collect();
+        let mut walks = short.to_vec();
+        walks.push(along);
+        let got = pair_sure(&walks, &p);
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].start, got[0].far), (1, FarEnd::Border));
+        // With nothing else for its ends, a short cable is one.
+        let got = pair_sure(&short, &p);
+        assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
+        // As long as the limit, the link wins on its score.
+        for w in &mut walks[..2] {
+            w.length_px = p.closed_min_length_px;
+        }
+        let got = pair_sure(&walks, &p);
         assert_eq!((got[0].start, got[0].far), (0, FarEnd::Seed(1)));
     }
 

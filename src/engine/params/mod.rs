@@ -142,6 +142,12 @@ pub struct Params {
     pub min_cable_score: f32,
     /// Walks shorter than this are never reported as cables, pixels.
     pub min_cable_length_px: f32,
+    /// A walk that closes on another end over less than this many pixels is weighed
+    /// after every other walk, so its ends take it only when nothing else is left for
+    /// them: two ends that near along one path are most often one terminal seen twice
+    /// (a metal tip and where its sleeve or the insulation ends) or two cables' ends
+    /// side by side, not a cable of their own (paper: no such rule).
+    pub closed_min_length_px: f32,
     /// A weaker terminal peak (one the detector keeps as a candidate, under its
     /// threshold) within this many pixels of a cable's free end, not at the frame's
     /// border, is reported as that cable's end; 0 reports none (README, Accuracy, "Ends
@@ -427,6 +433,7 @@ impl Default for Params {
             join_radius_px: 80.0,
             min_cable_score: 0.05,
             min_cable_length_px: 30.0,
+            closed_min_length_px: 60.0,
             end_confirm_px: 20.0,
             smoothing: 1.0,
             knot_spacing_px: 45.0,
@@ -539,6 +546,7 @@ impl Params {
             seed_region_steps: 0.0,
             close_max_lateral_steps: 100.0,
             close_min_steps: 0,
+            closed_min_length_px: 0.0,
             exposure_max_gain: 1.0,
             sharpen_amount: 0.0,
             width_tolerance: 100.0,

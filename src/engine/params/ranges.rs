@@ -67,6 +67,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("end_confirm_px", 0.0, 100.0),
     ("min_cable_score", 0.0, 1.0),
     ("min_cable_length_px", 0.0, 10_000.0),
+    ("closed_min_length_px", 0.0, 10_000.0),
     ("smoothing", 0.0, 1e6),
     ("knot_spacing_px", 2.0, 10_000.0),
     ("polyline_step_px", 0.1, 100.0),
