@@ -306,7 +306,9 @@ impl Segmentation {
     /// A cable of `earlier` is taken when its width at this scale is off
     /// `nominal_width_px` by more than `width_tolerance`, or when it starts at an end
     /// this pass left without a cable (a pale wire that scores under the floor at this
-    /// pass's size: the end is the same one, and the other pass followed it), provided
+    /// pass's size: the end is the same one, and the other pass followed it), or, when
+    /// this pass is the larger, when it has no end (a cable crossing the frame that the
+    /// enlarged pass lost: two thin wires side by side, whose gap widens), provided
     /// it is at least [`WHOLE_MIN_LENGTH`] nominal widths long at its own scale and
     /// fewer than [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within
     /// half their width plus its own). Its ends come along: an end of this pass within
@@ -340,7 +342,10 @@ impl Segmentation {
             }
             let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
             let unsuited = off_by_more(ratio, params.width_tolerance);
-            if !(unsuited || ends_here().next().is_some()) || cable.length_px < min_length {
+            let no_end = cable.end_indices.iter().all(Option::is_none)
+                && self.working_scale > earlier.working_scale;
+            if !(unsuited || no_end || ends_here().next().is_some()) || cable.length_px < min_length
+            {
                 continue;
             }
             let found: Vec<(&[[f32; 2]], f32)> = self.cables[..own]
@@ -563,6 +568,44 @@ mod tests {
         assert_eq!(seg.cables[1].end_indices, [Some(2), None]);
         assert_eq!(seg.end_cables, [Some(0), Some(0), Some(1)]);
         assert_eq!(points.len(), 3);
+    }
+
+    #[test]
+    fn a_cable_with_no_end_in_view_that_an_enlarged_pass_lost_is_taken() {
+        // The second pass, enlarged twofold for thin wires, found one cable between its
+        // ends 0 and 1.
+        let ends = [[100.0, 400.0], [540.0, 400.0]];
+        let cable = wide(0, ends, [Some(0), Some(1)], 4.0);
+        let mut seg = found(2.0, vec![cable], vec![Some(0), Some(0)]);
+        let mut points = vec![ends[0].map(f64::from), ends[1].map(f64::from)];
+        let mut confidences = vec![0.9, 0.9];
+        // The first pass's cables with no end, as wide as the second pass's scale
+        // suits (`width_px` there is nominal).
+        let earlier = |width_px: f32| {
+            found(
+                1.0,
+                vec![
+                    // Across a corner of the frame (two wires side by side, whose gap
+                    // the enlarged pass took for background): taken.
+                    wide(0, [[400.0, 0.0], [639.0, 300.0]], [None, None], width_px),
+                    // Along this pass's cable: explained by it.
+                    wide(1, [[100.0, 402.0], [540.0, 402.0]], [None, None], width_px),
+                ],
+                Vec::new(),
+            )
+        };
+        let p = Params::default();
+        let no_ends: (&[[f64; 2]], &[f32]) = (&[], &[]);
+        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier(4.0), no_ends, &p);
+        assert_eq!(taken, 1);
+        assert_eq!(seg.cables[1].ends, [[400.0, 0.0], [639.0, 300.0]]);
+        assert_eq!(seg.cables[1].end_indices, [None, None]);
+        assert_eq!((points.len(), seg.end_cables.len()), (2, 2));
+        // A pass shrunk to half for wide cables takes no such cable: the first pass
+        // walked their edges.
+        let (mut seg, mut points, mut confidences) = second_pass(16.0, [300.0, 100.0]);
+        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier(16.0), no_ends, &p);
+        assert_eq!(taken, 0);
     }
 
     /// Readings of `(width, length, score)`.
