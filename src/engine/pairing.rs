@@ -112,9 +112,9 @@ impl Floor {
 /// those of hypotheses accepted before it repeats a cable already found and is
 /// dropped. A walk that closes on an end after fewer than `close_min_steps` steps
 /// ([`Walk::steps`]) is no hypothesis; one that closes over less than
-/// `closed_min_length_px` is weighed after all the others. Two cables accepted as leaving the frame where
-/// the border walks they rest on join ([`merge_grazes`]) are one. The result is ordered
-/// by decreasing score.
+/// `closed_min_length_px` is weighed after all the others. Two cables accepted as
+/// leaving the frame where the border walks they rest on join ([`merge_grazes`]) are
+/// one. The result is ordered by decreasing score.
 pub fn pair(
     walks: &[Walk],
     confidence: &[f32],
