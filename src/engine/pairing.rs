@@ -343,6 +343,11 @@ mod tests {
         }
     }
 
+    /// The walks of ends 0 and 1 closing on each other, each of quality `q`.
+    fn closing_on_each_other(q: f32) -> [Walk; 2] {
+        [walk(0, WalkEnd::Seed(1), q), walk(1, WalkEnd::Seed(0), q)]
+    }
+
     /// [`pair`] with every end fully trusted (confidence 1), the default floor, no
     /// penalty for walks along a passing cable and no field.
     fn pair_sure(walks: &[Walk], p: &Params) -> Vec<Pairing> {
@@ -393,10 +398,7 @@ mod tests {
         let p = Params::default();
         // Ends 0 and 1 face each other across a gap: their walks close on each other
         // as soon as they leave their own superpixels; each also runs out of the frame.
-        let mut meet = [
-            walk(0, WalkEnd::Seed(1), 0.9),
-            walk(1, WalkEnd::Seed(0), 0.9),
-        ];
+        let mut meet = closing_on_each_other(0.9);
         for w in &mut meet {
             w.vertices.truncate(2);
         }
@@ -417,10 +419,7 @@ mod tests {
         // Ends 0 and 1 mark one terminal twice (a ferrule's tip and its base): their
         // walks close on each other after a step, confirmed both ways, over less than
         // `closed_min_length_px`, and score above end 1's walk along its cable.
-        let mut short = [
-            walk(0, WalkEnd::Seed(1), 0.9),
-            walk(1, WalkEnd::Seed(0), 0.9),
-        ];
+        let mut short = closing_on_each_other(0.9);
         for w in &mut short {
             w.length_px = 0.8 * p.closed_min_length_px;
         }

@@ -399,14 +399,13 @@ impl<'a> Walker<'a> {
             WalkEnd::Border => self.exit(head, end_heading).unwrap_or(head),
             _ => head,
         };
-        let through = from_ends
-            && p.field_through_factor < 1.0
-            && self.runs_on_behind(seed.point, &points, &vertices);
-        let opening = if from_ends {
-            self.opening(seed.point, &points)
-        } else {
-            1.0
-        };
+        // Read once for both terms; only walks from ends have them.
+        let way = from_ends
+            .then(|| self.opening_direction(seed.point, &points))
+            .flatten();
+        let through = p.field_through_factor < 1.0
+            && way.is_some_and(|u| self.runs_on_behind(seed.point, u, &vertices));
+        let opening = way.map_or(1.0, |u| self.opening(seed.point, u));
         Some(Walk {
             end_heading,
             end_point,
@@ -436,9 +435,10 @@ impl<'a> Walker<'a> {
         (d >= 1e-3).then(|| [(out[0] - seed[0]) / d, (out[1] - seed[1]) / d])
     }
 
-    /// [`Walk::opening`] of a walk from an end at `seed` through `points`.
-    fn opening(&self, seed: [f32; 2], points: &[[f32; 2]]) -> f32 {
-        let (Some(field), Some(u)) = (self.field_map, self.opening_direction(seed, points)) else {
+    /// [`Walk::opening`] of a walk from an end at `seed` that opens along `u`
+    /// ([`Self::opening_direction`]).
+    fn opening(&self, seed: [f32; 2], u: [f32; 2]) -> f32 {
+        let Some(field) = self.field_map else {
             return 1.0;
         };
         let agreement = alignment(u, field.orientation_at(seed[0], seed[1]));
@@ -446,15 +446,16 @@ impl<'a> Walker<'a> {
         1.0 - w + w * agreement
     }
 
-    /// Whether the cable a walk opens along runs on behind its seed: over most of the
-    /// samples one to two superpixel steps back from `seed` against the walk's opening
-    /// direction ([`Self::opening_direction`]), the field calls cable (`field_level`),
-    /// runs along that direction (`THROUGH_MIN_ALIGNMENT`) and the photo has the colour
-    /// of the walk's first superpixels (within `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end:
-    /// behind it lie its metal tip and the background. A cable that passes the end (one
-    /// the end's tip is pushed against) runs on.
-    fn runs_on_behind(&self, seed: [f32; 2], points: &[[f32; 2]], vertices: &[u32]) -> bool {
-        let (Some(field), Some(u)) = (self.field_map, self.opening_direction(seed, points)) else {
+    /// Whether the cable a walk over `vertices` opens along runs on behind its seed:
+    /// over most of the samples one to two superpixel steps back from `seed` against
+    /// the walk's opening direction `u` ([`Self::opening_direction`]), the field calls
+    /// cable (`field_level`), runs along that direction (`THROUGH_MIN_ALIGNMENT`) and
+    /// the photo has the colour of the walk's first superpixels (within
+    /// `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end: behind it lie its
+    /// metal tip and the background. A cable that passes the end (one the end's tip is
+    /// pushed against) runs on.
+    fn runs_on_behind(&self, seed: [f32; 2], u: [f32; 2], vertices: &[u32]) -> bool {
+        let Some(field) = self.field_map else {
             return false;
         };
         if self.end_behind(seed, u) {
@@ -793,8 +794,12 @@ mod tests {
                 // The field runs along the row: a way out along it keeps the walk's quality;
                 // one across it (onto a cable the end lies against) loses the weight.
                 let seed = seeds[0].point;
-                let along = walker.opening(seed, &[seed, [50.0, 30.0], [72.0, 31.0]]);
-                let across = walker.opening(seed, &[seed, [31.0, 50.0], [30.0, 72.0]]);
+                let opening = |points: &[[f32; 2]]| {
+                    let u = walker.opening_direction(seed, points).expect("a way out");
+                    walker.opening(seed, u)
+                };
+                let along = opening(&[seed, [50.0, 30.0], [72.0, 31.0]]);
+                let across = opening(&[seed, [31.0, 50.0], [30.0, 72.0]]);
                 assert!((along - 1.0).abs() < 1e-3, "{along}");
                 let w = p.field_opening_weight;
                 assert!(w > 0.0 && (across - (1.0 - w)).abs() < 1e-3, "{across}");
