@@ -222,7 +222,6 @@ fn merge_grazes(accepted: &mut Vec<Pairing>, grazing: &[Pairing]) {
         accepted[a] = *join;
         accepted.remove(b);
     }
-    accepted.sort_by(|a, b| b.score.total_cmp(&a.score));
 }
 
 /// One more than the largest superpixel index any of `walks` visits.

@@ -327,6 +327,7 @@ impl Segmentation {
     ) -> usize {
         let own = self.cables.len();
         let min_length = WHOLE_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
+        let enlarged = self.working_scale > earlier.working_scale;
         let mut taken = 0;
         for mut cable in earlier.cables {
             let same = |i: usize| {
@@ -342,8 +343,7 @@ impl Segmentation {
             }
             let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
             let unsuited = off_by_more(ratio, params.width_tolerance);
-            let no_end = cable.end_indices.iter().all(Option::is_none)
-                && self.working_scale > earlier.working_scale;
+            let no_end = enlarged && cable.end_indices.iter().all(Option::is_none);
             if !(unsuited || no_end || ends_here().next().is_some()) || cable.length_px < min_length
             {
                 continue;
