@@ -8,6 +8,7 @@
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
 //! [`loops`] takes in the loop a cable was walked across where it crosses itself,
+//! [`traces`] follows the field between ends no walk found a cable from,
 //! [`twins`] splits a cable found over two of one colour laid together,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
@@ -37,6 +38,7 @@ mod scale;
 pub mod sharpness;
 pub mod spline;
 pub mod superpixels;
+mod traces;
 mod twins;
 pub mod walk;
 
@@ -308,6 +310,19 @@ pub fn segment_oversegmented(
             cable.id = cables.len();
             cables.push(cable);
         }
+        timings.walks += ms(t);
+    }
+    if let Some(field) = field {
+        let t = Instant::now();
+        let points: Vec<[f32; 2]> = seeds.iter().map(|s| s.point).collect();
+        let ground = traces::Ground {
+            field,
+            lab: &lab,
+            image,
+            params,
+            step_px: sp.step,
+        };
+        traces::trace_free_ends(&mut cables, &mut end_cables, &points, confidence, ground);
         timings.walks += ms(t);
     }
     if let Some(field) = vertex_field.as_deref().filter(|_| params.loops) {

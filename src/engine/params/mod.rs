@@ -386,6 +386,10 @@ pub struct Params {
     /// cable does, short of the end the network missed) or left the frame (across a
     /// cable found at the piece's end; README, "How the engine uses the field").
     pub field_orphan_run_on: bool,
+    /// Cable probability a trace in the field follows between two ends that no walk
+    /// found a cable from (a thin dark wire on a dark card, along which no superpixel
+    /// runs; README, "How the engine uses the field"). 1 or more: no traces.
+    pub field_trace_level: f32,
 }
 
 /// Names of the built-in presets, in the order `--help` lists them.
@@ -496,6 +500,7 @@ impl Default for Params {
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
             field_orphan_run_on: true,
+            field_trace_level: 0.5,
         }
     }
 }

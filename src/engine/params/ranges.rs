@@ -122,6 +122,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_reached_floor", 0.0, 1.0),
     ("field_orphan_level", 0.0, 1.0),
     ("field_orphan_min_steps", 1.0, 1000.0),
+    ("field_trace_level", 0.0, 1.0),
 ];
 
 #[cfg(test)]

@@ -1,0 +1,466 @@
+//! Cables the field shows between two ends that no walk could follow. A thin dark wire
+//! on a dark card is plain to the network, yet SLIC's colour term is too weak there to
+//! cut superpixels along it: every superpixel next to its ends is mostly card, and the
+//! walks from them are lost at their first step. Where two ends still have no cable
+//! once the walks, the border and the field's pieces have been tried, the field itself
+//! is followed from each: half-cell steps along the field's direction where the
+//! network is sure of one, each moved across the heading to the top of the ridge of
+//! cable probability, straight on over cables already found (where the field's
+//! direction mixes both cables'), until the trace fades, leaves the frame or arrives
+//! at another such end. A trace that arrives is fitted and refined on the photo like a
+//! walked cable, and kept when it reads as a cable there and does not repeat one
+//! already found.
+
+use image::RgbImage;
+
+use super::Params;
+use super::cable::{Cable, fit_refined, median_rgb};
+use super::color::LabImage;
+use super::field::CableField;
+use super::geometry::{dist, points_near_any, polyline_length, unit_or};
+
+/// A trace's step, in field cells: fine enough to follow a bend of a cable a few cells
+/// across.
+const STEP_CELLS: f32 = 0.5;
+
+/// How far beside a cable already found, in field cells past its half width, a trace
+/// stops turning with the field (whose direction there mixes both cables').
+const CROSSING_CELLS: f32 = 1.5;
+
+/// Length of the trace behind it, in field cells, whose direction a trace keeps
+/// across a cable already found.
+const CHORD_CELLS: f32 = 3.0;
+
+/// Least confidence of the field's direction (the length of its (cos 2θ, sin 2θ)) that
+/// turns a trace's heading, and the largest turn it makes per step, degrees.
+const SURE_DIRECTION: f32 = 0.5;
+const MAX_TURN_DEG: f32 = 30.0;
+
+/// How far across its heading a trace looks for the top of the field's ridge after
+/// each step, in field cells either way.
+const RECENTRE_CELLS: f32 = 0.5;
+
+/// Cable probability a point across the heading loses per pixel from the straight
+/// course: at a crossing, the cable ahead and the one across are both cable, and the
+/// one ahead wins.
+const RECENTRE_COST: f32 = 0.01;
+
+/// Steps in a row a trace may run under the level before it is taken to have faded
+/// (a cell or two where the network's probability dips along a cable).
+const MAX_WEAK_STEPS: usize = 3;
+
+/// Radius, in field cells, of the ring around an end where a trace looks for the way
+/// its cable leaves: past the end's metal tip, which the network need not call cable.
+const OPENING_CELLS: f32 = 2.0;
+
+/// Directions tried on that ring.
+const OPENING_DIRECTIONS: usize = 48;
+
+/// Share of a trace's centreline near cables already found from which it repeats one.
+const MAX_SHARED: f32 = 0.3;
+
+/// Everything a trace reads.
+#[derive(Clone, Copy)]
+pub(super) struct Ground<'a> {
+    /// The network's cable field.
+    pub field: &'a CableField,
+    /// The working image in CIELAB, blurred as the superpixels saw it.
+    pub lab: &'a LabImage,
+    /// The working image.
+    pub image: &'a RgbImage,
+    /// The engine's parameters.
+    pub params: &'a Params,
+    /// The superpixels' nominal step, pixels.
+    pub step_px: f32,
+}
+
+/// Appends to `cables` the cables traced in the field between ends that have none
+/// (`end_cables[i]` is `None`) and lie at least `field_orphan_min_steps` superpixel
+/// steps apart, and records them in `end_cables`. `confidence` holds the ends'
+/// confidences; a traced cable scores the mean cable probability along its centreline
+/// times the geometric mean of its two ends' confidences, and is kept from the floor
+/// of every cable with a field (`field_min_cable_score`) when no more than
+/// [`MAX_SHARED`] of it lies within a field cell past their half widths of a cable
+/// already found.
+pub(super) fn trace_free_ends(
+    cables: &mut Vec<Cable>,
+    end_cables: &mut [Option<usize>],
+    ends: &[[f32; 2]],
+    confidence: &[f32],
+    ground: Ground<'_>,
+) {
+    let params = ground.params;
+    if params.field_trace_level >= 1.0 {
+        return;
+    }
+    let free: Vec<usize> = (0..ends.len())
+        .filter(|&i| end_cables[i].is_none())
+        .collect();
+    if free.len() < 2 {
+        return;
+    }
+    let min_apart = params.field_orphan_min_steps * ground.step_px;
+    let cell = 0.5 * (ground.field.cell_px[0] + ground.field.cell_px[1]);
+    for &a in &free {
+        if end_cables[a].is_some() {
+            continue;
+        }
+        let targets: Vec<(usize, [f32; 2])> = free
+            .iter()
+            .filter(|&&b| b != a && end_cables[b].is_none())
+            .filter(|&&b| dist(ends[a], ends[b]) >= min_apart)
+            .map(|&b| (b, ends[b]))
+            .collect();
+        let crossed: Vec<(&[[f32; 2]], f32)> = cables
+            .iter()
+            .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
+            .collect();
+        let Some((b, points)) = trace(ground.field, ends[a], &targets, &crossed, params) else {
+            continue;
+        };
+        let Some(mut cable) = model(&points, [a, b], ground) else {
+            continue;
+        };
+        let found: Vec<(&[[f32; 2]], f32)> = cables
+            .iter()
+            .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
+            .collect();
+        let shared = points_near_any(&cable.polyline, &found) as f32;
+        cable.score *= (confidence[a] * confidence[b]).sqrt();
+        if shared > MAX_SHARED * cable.polyline.len() as f32
+            || cable.score < params.field_min_cable_score
+        {
+            continue;
+        }
+        cable.id = cables.len();
+        end_cables[a] = Some(cable.id);
+        end_cables[b] = Some(cable.id);
+        cables.push(cable);
+    }
+}
+
+/// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, both its
+/// first and last point), fitted and refined with both ends held; `None` when it
+/// cannot be fitted, is shorter than `min_cable_length_px`, reads a ridge (a cable on
+/// its background, not a step between two backgrounds) on fewer than
+/// `ended_min_ridge_share` of its profiles or lies on cable pixels for less than
+/// `field_min_share` of its length. Its score is the mean cable
+/// probability along it.
+fn model(points: &[[f32; 2]], ids: [usize; 2], ground: Ground<'_>) -> Option<Cable> {
+    let Ground {
+        field,
+        lab,
+        image,
+        params,
+        ..
+    } = ground;
+    let mut weights = vec![1.0; points.len()];
+    let last = points.len() - 1;
+    weights[0] = params.end_weight;
+    weights[last] = params.end_weight;
+    let anchors = [points[0], points[last]].map(|p| Some((p, params.end_weight)));
+    let fitted = fit_refined(points, &weights, anchors, lab, params)?;
+    let polyline = fitted.polyline;
+    let length_px = polyline_length(&polyline);
+    let ridge_share = fitted.ridge_share.unwrap_or(1.0);
+    if length_px < params.min_cable_length_px
+        || ridge_share < params.ended_min_ridge_share
+        || field.share_on_cable(&polyline, params.field_level) < params.field_min_share
+    {
+        return None;
+    }
+    let mean_cable = polyline
+        .iter()
+        .map(|p| field.cable_at(p[0], p[1]))
+        .sum::<f32>()
+        / polyline.len() as f32;
+    Some(Cable {
+        id: 0,
+        ends: [polyline[0], polyline[polyline.len() - 1]],
+        end_indices: ids.map(Some),
+        twin_ends: [None, None],
+        color: median_rgb(image, &polyline),
+        spline: fitted.spline,
+        width_px: fitted.width.unwrap_or(params.nominal_width_px),
+        length_px,
+        polyline,
+        ridge_share,
+        score: mean_cable.clamp(0.0, 1.0),
+    })
+}
+
+/// Follows the field from `start` up its ridge of cable probability at least
+/// `field_trace_level`: returns the first of `targets` (an index and its point) that
+/// the trace comes within `close_radius_px` of once it has run `min_cable_length_px`,
+/// with the trace's points from `start` to that target's point; `None` when it fades,
+/// leaves the frame or runs longer than the frame's perimeter first.
+fn trace(
+    field: &CableField,
+    start: [f32; 2],
+    targets: &[(usize, [f32; 2])],
+    found: &[(&[[f32; 2]], f32)],
+    params: &Params,
+) -> Option<(usize, Vec<[f32; 2]>)> {
+    let level = params.field_trace_level;
+    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let step = STEP_CELLS * cell;
+    let size = [
+        field.width as f32 * field.cell_px[0],
+        field.height as f32 * field.cell_px[1],
+    ];
+    let cable = |p: [f32; 2]| field.cable_at(p[0], p[1]);
+    let ahead = |p: [f32; 2], d: [f32; 2], k: f32| [p[0] + k * step * d[0], p[1] + k * step * d[1]];
+    let inside = |p: [f32; 2]| p[0] >= 0.0 && p[1] >= 0.0 && p[0] < size[0] && p[1] < size[1];
+
+    let mut dir = opening(field, start, OPENING_CELLS * cell, level)?;
+    let mut points = vec![start];
+    let mut p = start;
+    let (mut run, mut weak, mut crossed) = (0.0, 0, false);
+    let max_run = 2.0 * (size[0] + size[1]);
+    while run < max_run {
+        // Over a cable already found (a crossing), the trace runs straight on, along
+        // the way it came rather than the heading the field bent near the other
+        // cable. Elsewhere its heading turns to the field's direction where the
+        // network is sure of one, and each step goes along it, then across it to the
+        // ridge's top.
+        let near_found = [p, ahead(p, dir, 1.0), ahead(p, dir, 2.0)]
+            .iter()
+            .any(|&x| points_near_any(&[x], found) > 0);
+        if near_found {
+            if !crossed {
+                dir = unit_or(chord(&points, CHORD_CELLS * cell), dir);
+                crossed = true;
+            }
+            p = ahead(p, dir, 1.0);
+        } else {
+            crossed = false;
+            if let Some(along) = field_direction(field, p, dir) {
+                dir = along;
+            }
+            let q = ahead(p, dir, 1.0);
+            let normal = [-dir[1], dir[0]];
+            let reach = (RECENTRE_CELLS * cell).round() as i32;
+            let offset = (-reach..=reach)
+                .map(|o| o as f32)
+                .map(|o| {
+                    let across = [q[0] + o * normal[0], q[1] + o * normal[1]];
+                    (cable(across) - RECENTRE_COST * o.abs(), o)
+                })
+                .max_by(|x, y| x.0.total_cmp(&y.0))
+                .map_or(0.0, |(_, o)| o);
+            p = [q[0] + offset * normal[0], q[1] + offset * normal[1]];
+        }
+        run += step;
+        if !inside(p) {
+            return None;
+        }
+        // Over a crossing the field may dip between the two cables' ridges: only a
+        // trace away from the cables found fades.
+        if cable(p) < level && !near_found {
+            weak += 1;
+            if weak > MAX_WEAK_STEPS {
+                return None;
+            }
+        } else {
+            weak = 0;
+        }
+        points.push(p);
+        if run >= params.min_cable_length_px
+            && let Some(&(id, target)) = targets
+                .iter()
+                .filter(|(_, t)| dist(*t, p) < params.close_radius_px)
+                .min_by(|x, y| dist(x.1, p).total_cmp(&dist(y.1, p)))
+        {
+            points.push(target);
+            return Some((id, points));
+        }
+    }
+    None
+}
+
+/// The way the cable leaves an end at `start`: the direction towards the point of
+/// highest cable probability on the circle of `radius` around it, when that
+/// probability reaches `level`.
+fn opening(field: &CableField, start: [f32; 2], radius: f32, level: f32) -> Option<[f32; 2]> {
+    (0..OPENING_DIRECTIONS)
+        .map(|i| {
+            let a = i as f32 * std::f32::consts::TAU / OPENING_DIRECTIONS as f32;
+            let d = [a.cos(), a.sin()];
+            (
+                field.cable_at(start[0] + radius * d[0], start[1] + radius * d[1]),
+                d,
+            )
+        })
+        .max_by(|x, y| x.0.total_cmp(&y.0))
+        .filter(|&(p, _)| p >= level)
+        .map(|(_, d)| d)
+}
+
+/// The field's direction at `p` as a unit vector the way of `heading`, when the field
+/// is at least [`SURE_DIRECTION`] sure of it and it lies within [`MAX_TURN_DEG`] of
+/// `heading`.
+fn field_direction(field: &CableField, p: [f32; 2], heading: [f32; 2]) -> Option<[f32; 2]> {
+    let [c2, s2] = field.orientation_at(p[0], p[1]);
+    if c2.hypot(s2) < SURE_DIRECTION {
+        return None;
+    }
+    let theta = 0.5 * s2.atan2(c2);
+    let mut d = [theta.cos(), theta.sin()];
+    if d[0] * heading[0] + d[1] * heading[1] < 0.0 {
+        d = [-d[0], -d[1]];
+    }
+    (d[0] * heading[0] + d[1] * heading[1] >= MAX_TURN_DEG.to_radians().cos()).then_some(d)
+}
+
+/// The direction from the point of `points` `span` (pixels, along the line) before
+/// its last to its last: the zero vector for fewer than two points.
+fn chord(points: &[[f32; 2]], span: f32) -> [f32; 2] {
+    let Some(&last) = points.last() else {
+        return [0.0, 0.0];
+    };
+    let mut run = 0.0;
+    let mut from = last;
+    for w in points.windows(2).rev() {
+        from = w[0];
+        run += dist(w[0], w[1]);
+        if run >= span {
+            break;
+        }
+    }
+    [last[0] - from[0], last[1] - from[1]]
+}
+
+#[cfg(test)]
+mod tests {
+    use image::Rgb;
+
+    use super::super::cable::straight;
+    use super::*;
+
+    const CELL: f32 = 8.0;
+
+    /// Unit direction of the bright cable: 35° down from the wire's, so that near
+    /// their crossing the field's direction, their mean, still looks sure.
+    fn across() -> [f32; 2] {
+        let a = 35f32.to_radians();
+        [a.cos(), a.sin()]
+    }
+
+    /// Distances of photo point `p` from the wire (along y = 60 from x = 20 to 220)
+    /// and from the bright cable (through (120, 60) along [`across`]).
+    fn distances(p: [f32; 2]) -> (f32, f32) {
+        let wire = if (20.0..=220.0).contains(&p[0]) {
+            (p[1] - 60.0).abs()
+        } else {
+            f32::MAX
+        };
+        let d = across();
+        let cable = ((p[0] - 120.0) * d[1] - (p[1] - 60.0) * d[0]).abs();
+        (wire, cable)
+    }
+
+    /// A 240x120 dark grey photo with a lighter wire 4 px wide and a bright cable 8 px
+    /// wide crossing it ([`distances`]), and a field that shows both (the wire at 0.8,
+    /// the cable at 0.95; where both lie near a cell, its direction is their mean).
+    fn scene() -> (RgbImage, CableField) {
+        let image = RgbImage::from_fn(240, 120, |x, y| match distances([x as f32, y as f32]) {
+            (_, c) if c <= 4.0 => Rgb([200, 200, 255]),
+            (w, _) if w <= 2.0 => Rgb([95, 95, 95]),
+            _ => Rgb([40, 40, 40]),
+        });
+        let (w, h) = (30, 15);
+        let d = across();
+        let cells: Vec<(f32, [f32; 2])> = (0..w * h)
+            .map(|i| {
+                let centre = [((i % w) as f32 + 0.5) * CELL, ((i / w) as f32 + 0.5) * CELL];
+                let (wire, cable) = distances(centre);
+                let mut p = 0.0f32;
+                let mut o = [0.0f32, 0.0];
+                let mut n = 0.0;
+                if wire <= 0.6 * CELL {
+                    p = 0.8;
+                    o = [1.0, 0.0];
+                    n += 1.0;
+                }
+                if cable <= 0.6 * CELL {
+                    p = 0.95;
+                    o = [o[0] + d[0] * d[0] - d[1] * d[1], o[1] + 2.0 * d[0] * d[1]];
+                    n += 1.0;
+                }
+                (p, if n > 0.0 { [o[0] / n, o[1] / n] } else { o })
+            })
+            .collect();
+        let field = CableField {
+            width: w,
+            height: h,
+            cell_px: [CELL, CELL],
+            cable: cells.iter().map(|c| c.0).collect(),
+            orientation: cells.iter().map(|c| c.1).collect(),
+        };
+        (image, field)
+    }
+
+    /// The cables after tracing between `ends` (none of them on a cable yet) with the
+    /// bright cable already found.
+    fn traced(ends: &[[f32; 2]], params: &Params) -> (Vec<Cable>, Vec<Option<usize>>) {
+        let (image, field) = scene();
+        let mut lab = LabImage::from_rgb(image.as_raw(), 240, 120);
+        lab.gaussian_blur(params.sigma);
+        let d = across();
+        let through = [-1.0, 1.0].map(|t: f32| [120.0 + 80.0 * t * d[0], 60.0 + 80.0 * t * d[1]]);
+        let mut cables = vec![straight(0, through, [None, None])];
+        let mut end_cables = vec![None; ends.len()];
+        let ground = Ground {
+            field: &field,
+            lab: &lab,
+            image: &image,
+            params,
+            step_px: 12.0,
+        };
+        let confidence = vec![1.0; ends.len()];
+        trace_free_ends(&mut cables, &mut end_cables, ends, &confidence, ground);
+        (cables, end_cables)
+    }
+
+    #[test]
+    fn a_wire_the_field_shows_between_two_free_ends_is_traced_straight_across_a_cable() {
+        let ends = [[20.0, 60.0], [220.0, 60.0]];
+        let (cables, end_cables) = traced(&ends, &Params::default());
+        assert_eq!(cables.len(), 2, "one cable traced");
+        let wire = &cables[1];
+        assert_eq!(wire.end_indices, [Some(0), Some(1)]);
+        assert_eq!(end_cables, vec![Some(1), Some(1)]);
+        let off = wire
+            .polyline
+            .iter()
+            .map(|p| (p[1] - 60.0).abs())
+            .fold(0.0, f32::max);
+        assert!(
+            off < 2.0,
+            "the trace keeps to the wire across the cable: {off} px off"
+        );
+        assert!(wire.score > 0.5, "score {}", wire.score);
+
+        let off = Params {
+            field_trace_level: 1.0,
+            ..Params::default()
+        };
+        assert_eq!(traced(&ends, &off).0.len(), 1, "no traces at level 1");
+    }
+
+    #[test]
+    fn a_trace_along_a_cable_already_found_is_no_cable_of_its_own() {
+        let d = across();
+        let ends = [-1.0, 1.0].map(|t: f32| [120.0 + 50.0 * t * d[0], 60.0 + 50.0 * t * d[1]]);
+        let (cables, end_cables) = traced(&ends, &Params::default());
+        assert_eq!(cables.len(), 1);
+        assert_eq!(end_cables, vec![None, None]);
+    }
+
+    #[test]
+    fn ends_with_no_cable_between_them_in_the_field_stay_free() {
+        let (cables, end_cables) = traced(&[[20.0, 15.0], [220.0, 105.0]], &Params::default());
+        assert_eq!(cables.len(), 1);
+        assert_eq!(end_cables, vec![None, None]);
+    }
+}
