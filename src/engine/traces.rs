@@ -1,13 +1,13 @@
-//! Cables the field shows between two ends that no walk could follow. A thin dark wire
-//! on a dark card is plain to the network, yet SLIC's colour term is too weak there to
-//! cut superpixels along it: every superpixel next to its ends is mostly card, and the
-//! walks from them are lost at their first step. Where two ends still have no cable
-//! once the walks, the border and the field's pieces have been tried, the field itself
-//! is followed from each: half-cell steps along the field's direction where the
-//! network is sure of one, each moved across the heading to the top of the ridge of
-//! cable probability, straight on over cables already found (where the field's
-//! direction mixes both cables'), until the trace fades, leaves the frame or arrives
-//! at another such end. A trace that arrives is fitted and refined on the photo like a
+//! Cables the field shows from ends that no walk could follow. A thin dark wire on a
+//! dark card is plain to the network, yet SLIC's colour term is too weak there to cut
+//! superpixels along it: every superpixel next to its ends is mostly card, and the
+//! walks from them are lost at their first step. Where an end still has no cable once
+//! the walks, the border and the field's pieces have been tried, the field itself is
+//! followed from it: half-cell steps along the field's direction where the network is
+//! sure of one, each moved across the heading to the top of the ridge of cable
+//! probability, straight on over cables already found (where the field's direction
+//! mixes both cables'), until the trace fades, arrives at another such end or leaves
+//! the frame. A trace that arrives or leaves is fitted and refined on the photo like a
 //! walked cable, and kept when it reads as a cable there and does not repeat one
 //! already found.
 
@@ -17,7 +17,7 @@ use super::Params;
 use super::cable::{Cable, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::CableField;
-use super::geometry::{dist, points_near_any, polyline_length, unit_or};
+use super::geometry::{border_exit, dist, points_near_any, polyline_length, unit_or};
 
 /// A trace's step, in field cells: fine enough to follow a bend of a cable a few cells
 /// across.
@@ -74,11 +74,13 @@ pub(super) struct Ground<'a> {
     pub step_px: f32,
 }
 
-/// Appends to `cables` the cables traced in the field between ends that have none
-/// (`end_cables[i]` is `None`) and lie at least `field_orphan_min_steps` superpixel
-/// steps apart, and records them in `end_cables`. `confidence` holds the ends'
-/// confidences; a traced cable scores the mean cable probability along its centreline
-/// times the geometric mean of its two ends' confidences, and is kept from the floor
+/// Appends to `cables` the cables traced in the field from ends that have none
+/// (`end_cables[i]` is `None`), to another such end or out of the frame, at least
+/// `field_orphan_min_steps` superpixel steps from where they start, and records them
+/// in `end_cables`. `confidence` holds the ends' confidences; a traced cable scores the
+/// mean cable probability along its centreline times the geometric mean of its two
+/// ends' confidences (its one end's, when it leaves the frame), and is kept from the
+/// floor
 /// of every cable with a field (`field_min_cable_score`) when no more than
 /// [`MAX_SHARED`] of it lies within a field cell past their half widths of a cable
 /// already found.
@@ -96,7 +98,7 @@ pub(super) fn trace_free_ends(
     let free: Vec<usize> = (0..ends.len())
         .filter(|&i| end_cables[i].is_none())
         .collect();
-    if free.len() < 2 {
+    if free.is_empty() {
         return;
     }
     let min_apart = params.field_orphan_min_steps * ground.step_px;
@@ -118,7 +120,10 @@ pub(super) fn trace_free_ends(
         let Some((b, points)) = trace(ground.field, ends[a], &targets, &crossed, params) else {
             continue;
         };
-        let Some(mut cable) = model(&points, [a, b], ground) else {
+        if b.is_none() && dist(points[0], points[points.len() - 1]) < min_apart {
+            continue;
+        }
+        let Some(mut cable) = model(&points, [Some(a), b], ground) else {
             continue;
         };
         let found: Vec<(&[[f32; 2]], f32)> = cables
@@ -126,7 +131,10 @@ pub(super) fn trace_free_ends(
             .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
             .collect();
         let shared = points_near_any(&cable.polyline, &found) as f32;
-        cable.score *= (confidence[a] * confidence[b]).sqrt();
+        cable.score *= match b {
+            Some(b) => (confidence[a] * confidence[b]).sqrt(),
+            None => confidence[a],
+        };
         if shared > MAX_SHARED * cable.polyline.len() as f32
             || cable.score < params.field_min_cable_score
         {
@@ -134,19 +142,22 @@ pub(super) fn trace_free_ends(
         }
         cable.id = cables.len();
         end_cables[a] = Some(cable.id);
-        end_cables[b] = Some(cable.id);
+        if let Some(b) = b {
+            end_cables[b] = Some(cable.id);
+        }
         cables.push(cable);
     }
 }
 
-/// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, both its
-/// first and last point), fitted and refined with both ends held; `None` when it
-/// cannot be fitted, is shorter than `min_cable_length_px`, reads a ridge (a cable on
-/// its background, not a step between two backgrounds) on fewer than
-/// `ended_min_ridge_share` of its profiles or lies on cable pixels for less than
-/// `field_min_share` of its length. Its score is the mean cable
-/// probability along it.
-fn model(points: &[[f32; 2]], ids: [usize; 2], ground: Ground<'_>) -> Option<Cable> {
+/// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, or to the
+/// frame's edge where that is `None`: its first and last point), fitted and refined
+/// with both held; `None` when it cannot be fitted, is shorter than
+/// `min_cable_length_px`, reads a ridge (a cable on its background, not a step between
+/// two backgrounds) on fewer than `ended_min_ridge_share` of its profiles
+/// (`min_ridge_share`, as a cable with no end, when it leaves the frame) or lies on
+/// cable pixels for less than `field_min_share` of its length. Its score is the mean
+/// cable probability along it.
+fn model(points: &[[f32; 2]], ids: [Option<usize>; 2], ground: Ground<'_>) -> Option<Cable> {
     let Ground {
         field,
         lab,
@@ -164,7 +175,12 @@ fn model(points: &[[f32; 2]], ids: [usize; 2], ground: Ground<'_>) -> Option<Cab
     let length_px = polyline_length(&polyline);
     let ridge_share = fitted.ridge_share.unwrap_or(1.0);
     if length_px < params.min_cable_length_px
-        || ridge_share < params.ended_min_ridge_share
+        || ridge_share
+            < if ids[1].is_some() {
+                params.ended_min_ridge_share
+            } else {
+                params.min_ridge_share
+            }
         || field.share_on_cable(&polyline, params.field_level) < params.field_min_share
     {
         return None;
@@ -177,7 +193,7 @@ fn model(points: &[[f32; 2]], ids: [usize; 2], ground: Ground<'_>) -> Option<Cab
     Some(Cable {
         id: 0,
         ends: [polyline[0], polyline[polyline.len() - 1]],
-        end_indices: ids.map(Some),
+        end_indices: ids,
         twin_ends: [None, None],
         color: median_rgb(image, &polyline),
         spline: fitted.spline,
@@ -192,15 +208,16 @@ fn model(points: &[[f32; 2]], ids: [usize; 2], ground: Ground<'_>) -> Option<Cab
 /// Follows the field from `start` up its ridge of cable probability at least
 /// `field_trace_level`: returns the first of `targets` (an index and its point) that
 /// the trace comes within `close_radius_px` of once it has run `min_cable_length_px`,
-/// with the trace's points from `start` to that target's point; `None` when it fades,
-/// leaves the frame or runs longer than the frame's perimeter first.
+/// with the trace's points from `start` to that target's point, or `None` for the
+/// target and the points to where it leaves the frame; `None` when it fades or runs
+/// longer than the frame's perimeter first.
 fn trace(
     field: &CableField,
     start: [f32; 2],
     targets: &[(usize, [f32; 2])],
     found: &[(&[[f32; 2]], f32)],
     params: &Params,
-) -> Option<(usize, Vec<[f32; 2]>)> {
+) -> Option<(Option<usize>, Vec<[f32; 2]>)> {
     let level = params.field_trace_level;
     let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
     let step = STEP_CELLS * cell;
@@ -252,7 +269,10 @@ fn trace(
         }
         run += step;
         if !inside(p) {
-            return None;
+            let last = points[points.len() - 1];
+            let exit = border_exit(last, dir, size[0] as usize, size[1] as usize, 2.0 * step)?;
+            points.push(exit);
+            return Some((None, points));
         }
         // Over a crossing the field may dip between the two cables' ridges: only a
         // trace away from the cables found fades.
@@ -272,7 +292,7 @@ fn trace(
                 .min_by(|x, y| dist(x.1, p).total_cmp(&dist(y.1, p)))
         {
             points.push(target);
-            return Some((id, points));
+            return Some((Some(id), points));
         }
     }
     None
@@ -346,10 +366,10 @@ mod tests {
         [a.cos(), a.sin()]
     }
 
-    /// Distances of photo point `p` from the wire (along y = 60 from x = 20 to 220)
-    /// and from the bright cable (through (120, 60) along [`across`]).
-    fn distances(p: [f32; 2]) -> (f32, f32) {
-        let wire = if (20.0..=220.0).contains(&p[0]) {
+    /// Distances of photo point `p` from the wire (along y = 60 from x = 20 to
+    /// `wire_to`) and from the bright cable (through (120, 60) along [`across`]).
+    fn distances(p: [f32; 2], wire_to: f32) -> (f32, f32) {
+        let wire = if (20.0..=wire_to).contains(&p[0]) {
             (p[1] - 60.0).abs()
         } else {
             f32::MAX
@@ -362,18 +382,20 @@ mod tests {
     /// A 240x120 dark grey photo with a lighter wire 4 px wide and a bright cable 8 px
     /// wide crossing it ([`distances`]), and a field that shows both (the wire at 0.8,
     /// the cable at 0.95; where both lie near a cell, its direction is their mean).
-    fn scene() -> (RgbImage, CableField) {
-        let image = RgbImage::from_fn(240, 120, |x, y| match distances([x as f32, y as f32]) {
-            (_, c) if c <= 4.0 => Rgb([200, 200, 255]),
-            (w, _) if w <= 2.0 => Rgb([95, 95, 95]),
-            _ => Rgb([40, 40, 40]),
+    fn scene(wire_to: f32) -> (RgbImage, CableField) {
+        let image = RgbImage::from_fn(240, 120, |x, y| {
+            match distances([x as f32, y as f32], wire_to) {
+                (_, c) if c <= 4.0 => Rgb([200, 200, 255]),
+                (w, _) if w <= 2.0 => Rgb([95, 95, 95]),
+                _ => Rgb([40, 40, 40]),
+            }
         });
         let (w, h) = (30, 15);
         let d = across();
         let cells: Vec<(f32, [f32; 2])> = (0..w * h)
             .map(|i| {
                 let centre = [((i % w) as f32 + 0.5) * CELL, ((i / w) as f32 + 0.5) * CELL];
-                let (wire, cable) = distances(centre);
+                let (wire, cable) = distances(centre, wire_to);
                 let mut p = 0.0f32;
                 let mut o = [0.0f32, 0.0];
                 let mut n = 0.0;
@@ -400,10 +422,19 @@ mod tests {
         (image, field)
     }
 
-    /// The cables after tracing between `ends` (none of them on a cable yet) with the
-    /// bright cable already found.
+    /// The cables after tracing from `ends` (none of them on a cable yet) with the
+    /// bright cable already found, the wire ending at x = 220.
     fn traced(ends: &[[f32; 2]], params: &Params) -> (Vec<Cable>, Vec<Option<usize>>) {
-        let (image, field) = scene();
+        traced_to(ends, params, 220.0)
+    }
+
+    /// [`traced`] with the wire running to x = `wire_to`.
+    fn traced_to(
+        ends: &[[f32; 2]],
+        params: &Params,
+        wire_to: f32,
+    ) -> (Vec<Cable>, Vec<Option<usize>>) {
+        let (image, field) = scene(wire_to);
         let mut lab = LabImage::from_rgb(image.as_raw(), 240, 120);
         lab.gaussian_blur(params.sigma);
         let d = across();
@@ -462,5 +493,22 @@ mod tests {
         let (cables, end_cables) = traced(&[[20.0, 15.0], [220.0, 105.0]], &Params::default());
         assert_eq!(cables.len(), 1);
         assert_eq!(end_cables, vec![None, None]);
+    }
+
+    #[test]
+    fn a_wire_the_field_shows_from_a_free_end_out_of_the_frame_is_traced_to_its_edge() {
+        let (cables, end_cables) = traced_to(&[[20.0, 60.0]], &Params::default(), 240.0);
+        assert_eq!(cables.len(), 2, "one cable traced");
+        let wire = &cables[1];
+        assert_eq!(wire.end_indices, [Some(0), None]);
+        assert_eq!(end_cables, vec![Some(1)]);
+        let exit = wire.ends[1];
+        assert!(
+            exit[0] > 237.0 && (exit[1] - 60.0).abs() < 2.0,
+            "it leaves at the frame's edge: {exit:?}"
+        );
+        // The same end with the wire stopping short of the edge: no cable.
+        let (cables, _) = traced_to(&[[20.0, 60.0]], &Params::default(), 220.0);
+        assert_eq!(cables.len(), 1);
     }
 }

@@ -386,9 +386,10 @@ pub struct Params {
     /// cable does, short of the end the network missed) or left the frame (across a
     /// cable found at the piece's end; README, "How the engine uses the field").
     pub field_orphan_run_on: bool,
-    /// Cable probability a trace in the field follows between two ends that no walk
-    /// found a cable from (a thin dark wire on a dark card, along which no superpixel
-    /// runs; README, "How the engine uses the field"). 1 or more: no traces.
+    /// Cable probability a trace in the field follows from an end that no walk found a
+    /// cable from, to another such end or out of the frame (a thin dark wire on a dark
+    /// card, along which no superpixel runs; README, "How the engine uses the field").
+    /// 1 or more: no traces.
     pub field_trace_level: f32,
 }
 
