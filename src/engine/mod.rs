@@ -8,7 +8,8 @@
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
 //! [`loops`] takes in the loop a cable was walked across where it crosses itself,
-//! [`traces`] follows the field from ends no walk found a cable from,
+//! [`traces`] follows the field from ends no walk found a cable from and from the
+//! frame's edge,
 //! [`twins`] splits a cable found over two of one colour laid together,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
@@ -321,6 +322,7 @@ pub fn segment_oversegmented(
             image,
             params,
             step_px: sp.step,
+            size: [sp.width, sp.height],
         };
         traces::trace_free_ends(&mut cables, &mut end_cables, &points, confidence, ground);
         timings.walks += ms(t);

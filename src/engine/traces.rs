@@ -1,14 +1,15 @@
-//! Cables the field shows from ends that no walk could follow. A thin dark wire on a
-//! dark card is plain to the network, yet SLIC's colour term is too weak there to cut
+//! Cables the field shows where no walk could follow them. A thin dark wire on a dark
+//! card is plain to the network, yet SLIC's colour term is too weak there to cut
 //! superpixels along it: every superpixel next to its ends is mostly card, and the
-//! walks from them are lost at their first step. Where an end still has no cable once
-//! the walks, the border and the field's pieces have been tried, the field itself is
-//! followed from it: half-cell steps along the field's direction where the network is
-//! sure of one, each moved across the heading to the top of the ridge of cable
+//! walks from them are lost at their first step. Once the walks, the border and the
+//! field's pieces have been tried, the field itself is followed from every end that
+//! still has no cable, then from where the field's cables meet the frame's edge with
+//! no cable found there: half-cell steps along the field's direction where the network
+//! is sure of one, each moved across the heading to the top of the ridge of cable
 //! probability, straight on over cables already found (where the field's direction
-//! mixes both cables'), until the trace fades, arrives at another such end or leaves
-//! the frame. A trace that arrives or leaves is fitted and refined on the photo like a
-//! walked cable, and kept when it reads as a cable there and does not repeat one
+//! mixes both cables'), until the trace fades, arrives at an end with no cable or
+//! leaves the frame. A trace that arrives or leaves is fitted and refined on the photo
+//! like a walked cable, and kept when it reads as a cable there and does not repeat one
 //! already found.
 
 use image::RgbImage;
@@ -17,7 +18,9 @@ use super::Params;
 use super::cable::{Cable, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::CableField;
-use super::geometry::{border_exit, dist, points_near_any, polyline_length, unit_or};
+use super::geometry::{
+    along_one_side, border_exit, dist, points_near_any, polyline_length, unit_or,
+};
 
 /// A trace's step, in field cells: fine enough to follow a bend of a cable a few cells
 /// across.
@@ -72,18 +75,22 @@ pub(super) struct Ground<'a> {
     pub params: &'a Params,
     /// The superpixels' nominal step, pixels.
     pub step_px: f32,
+    /// The working image's width and height, pixels.
+    pub size: [usize; 2],
 }
 
 /// Appends to `cables` the cables traced in the field from ends that have none
-/// (`end_cables[i]` is `None`), to another such end or out of the frame, at least
-/// `field_orphan_min_steps` superpixel steps from where they start, and records them
-/// in `end_cables`. `confidence` holds the ends' confidences; a traced cable scores the
-/// mean cable probability along its centreline times the geometric mean of its two
-/// ends' confidences (its one end's, when it leaves the frame), and is kept from the
-/// floor
-/// of every cable with a field (`field_min_cable_score`) when no more than
-/// [`MAX_SHARED`] of it lies within a field cell past their half widths of a cable
-/// already found.
+/// (`end_cables[i]` is `None`), and then from where the field's cables meet the
+/// frame's edge with no cable found there ([`border_starts`]), each to another such end
+/// or out of the frame at least `field_orphan_min_steps` superpixel steps from where it
+/// starts, and records them in `end_cables`. `confidence` holds the ends'
+/// confidences. A traced cable scores the mean cable probability along its centreline
+/// times the geometric mean of its two ends' confidences, its one end's when it has one
+/// in view, or `border_seed_confidence` when it has none; it is kept from the floor of
+/// every cable with a field (`field_min_cable_score`; `field_border_min_score` with no
+/// end in view) when no more than [`MAX_SHARED`] of it lies within a field cell past
+/// their half widths of a cable already found, and, with no end in view, when it does
+/// not run all along one side of the frame.
 pub(super) fn trace_free_ends(
     cables: &mut Vec<Cable>,
     end_cables: &mut [Option<usize>],
@@ -95,66 +102,176 @@ pub(super) fn trace_free_ends(
     if params.field_trace_level >= 1.0 {
         return;
     }
+    let cell = 0.5 * (ground.field.cell_px[0] + ground.field.cell_px[1]);
     let free: Vec<usize> = (0..ends.len())
         .filter(|&i| end_cables[i].is_none())
         .collect();
-    if free.is_empty() {
-        return;
+    let mut starts: Vec<Start> = free
+        .iter()
+        .filter_map(|&a| {
+            let dir = opening(
+                ground.field,
+                ends[a],
+                OPENING_CELLS * cell,
+                params.field_trace_level,
+            )?;
+            Some(Start {
+                point: ends[a],
+                dir,
+                end: Some(a),
+            })
+        })
+        .collect();
+    if params.border_cables {
+        starts.extend(border_starts(ground.field, ground.size, params));
     }
-    let min_apart = params.field_orphan_min_steps * ground.step_px;
-    let cell = 0.5 * (ground.field.cell_px[0] + ground.field.cell_px[1]);
-    for &a in &free {
-        if end_cables[a].is_some() {
+    for start in starts {
+        if start.end.is_some_and(|a| end_cables[a].is_some()) {
             continue;
         }
         let targets: Vec<(usize, [f32; 2])> = free
             .iter()
-            .filter(|&&b| b != a && end_cables[b].is_none())
-            .filter(|&&b| dist(ends[a], ends[b]) >= min_apart)
+            .filter(|&&b| Some(b) != start.end && end_cables[b].is_none())
             .map(|&b| (b, ends[b]))
             .collect();
-        let crossed: Vec<(&[[f32; 2]], f32)> = cables
-            .iter()
-            .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
-            .collect();
-        let Some((b, points)) = trace(ground.field, ends[a], &targets, &crossed, params) else {
+        let Some(cable) = follow(&start, &targets, cables, confidence, ground) else {
             continue;
         };
-        if b.is_none() && dist(points[0], points[points.len() - 1]) < min_apart {
-            continue;
+        let id = cables.len();
+        for i in cable.end_indices.into_iter().flatten() {
+            end_cables[i] = Some(id);
         }
-        let Some(mut cable) = model(&points, [Some(a), b], ground) else {
-            continue;
-        };
-        let found: Vec<(&[[f32; 2]], f32)> = cables
-            .iter()
-            .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
-            .collect();
-        let shared = points_near_any(&cable.polyline, &found) as f32;
-        cable.score *= match b {
-            Some(b) => (confidence[a] * confidence[b]).sqrt(),
-            None => confidence[a],
-        };
-        if shared > MAX_SHARED * cable.polyline.len() as f32
-            || cable.score < params.field_min_cable_score
-        {
-            continue;
-        }
-        cable.id = cables.len();
-        end_cables[a] = Some(cable.id);
-        if let Some(b) = b {
-            end_cables[b] = Some(cable.id);
-        }
-        cables.push(cable);
+        cables.push(Cable { id, ..cable });
     }
 }
 
-/// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, or to the
-/// frame's edge where that is `None`: its first and last point), fitted and refined
+/// Where a trace starts: a point, the way it sets off, and the given end it is, if any
+/// (otherwise a point on the frame's edge).
+struct Start {
+    point: [f32; 2],
+    dir: [f32; 2],
+    end: Option<usize>,
+}
+
+/// The cable traced from `start` to one of `targets` (free ends, an index and its
+/// point) or out of the frame, as [`trace_free_ends`] keeps it; `None` when the trace
+/// fades or its cable is not kept.
+fn follow(
+    start: &Start,
+    targets: &[(usize, [f32; 2])],
+    cables: &[Cable],
+    confidence: &[f32],
+    ground: Ground<'_>,
+) -> Option<Cable> {
+    let (field, params) = (ground.field, ground.params);
+    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let min_apart = params.field_orphan_min_steps * ground.step_px;
+    let targets: Vec<(usize, [f32; 2])> = targets
+        .iter()
+        .copied()
+        .filter(|&(_, t)| dist(start.point, t) >= min_apart)
+        .collect();
+    let crossed: Vec<(&[[f32; 2]], f32)> = cables
+        .iter()
+        .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
+        .collect();
+    // Where a cable found meets the edge, the field's run is that cable's.
+    if start.end.is_none() && points_near_any(&[start.point], &crossed) > 0 {
+        return None;
+    }
+    let (far, points) = trace(field, start, &targets, &crossed, params)?;
+    if dist(points[0], points[points.len() - 1]) < min_apart {
+        return None;
+    }
+    let ids = [start.end, far];
+    let mut cable = model(&points, ids, ground)?;
+    let found: Vec<(&[[f32; 2]], f32)> = cables
+        .iter()
+        .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
+        .collect();
+    let shared = points_near_any(&cable.polyline, &found) as f32;
+    let given: Vec<f32> = ids.into_iter().flatten().map(|i| confidence[i]).collect();
+    cable.score *= match given[..] {
+        [a, b] => (a * b).sqrt(),
+        [a] => a,
+        _ => params.border_seed_confidence,
+    };
+    let (floor, [w, h]) = (
+        if given.is_empty() {
+            params.field_border_min_score
+        } else {
+            params.field_min_cable_score
+        },
+        ground.size,
+    );
+    let kept = shared <= MAX_SHARED * cable.polyline.len() as f32
+        && cable.score >= floor
+        && !(given.is_empty() && along_one_side(&cable.polyline, w, h, params.border_margin_px));
+    kept.then_some(cable)
+}
+
+/// Where the field's cables meet the frame's edge: one start in the middle of every run
+/// of edge pixels whose cable probability reaches `field_trace_level`, as long as a
+/// cable crossing (`border_min_crossing_px` ..= `border_max_crossing_px`), heading
+/// into the frame along the field's direction there where it is sure of one (square
+/// to the edge otherwise). `size` is the image's width and height.
+fn border_starts(field: &CableField, size: [usize; 2], params: &Params) -> Vec<Start> {
+    let [w, h] = size.map(|v| v as f32);
+    // The edge pixels' centres, clockwise from the top left corner, with the inward
+    // normal of their side.
+    let mut ring: Vec<([f32; 2], [f32; 2])> = Vec::new();
+    ring.extend((0..size[0]).map(|x| ([x as f32 + 0.5, 0.5], [0.0, 1.0])));
+    ring.extend((1..size[1]).map(|y| ([w - 0.5, y as f32 + 0.5], [-1.0, 0.0])));
+    ring.extend(
+        (1..size[0])
+            .rev()
+            .map(|x| ([x as f32 - 0.5, h - 0.5], [0.0, -1.0])),
+    );
+    ring.extend(
+        (1..size[1] - 1)
+            .rev()
+            .map(|y| ([0.5, y as f32 + 0.5], [1.0, 0.0])),
+    );
+    let on: Vec<bool> = ring
+        .iter()
+        .map(|(p, _)| field.cable_at(p[0], p[1]) >= params.field_trace_level)
+        .collect();
+    let n = ring.len();
+    let Some(first_off) = (0..n).find(|&i| !on[i]) else {
+        return Vec::new();
+    };
+    let (shortest, longest) = (
+        params.border_min_crossing_px as usize,
+        params.border_max_crossing_px as usize,
+    );
+    let mut starts = Vec::new();
+    let mut i = 0;
+    while i < n {
+        if !on[(first_off + i) % n] {
+            i += 1;
+            continue;
+        }
+        let run = (i..n).take_while(|&j| on[(first_off + j) % n]).count();
+        if (shortest..=longest).contains(&run) {
+            let (point, inward) = ring[(first_off + i + run / 2) % n];
+            let dir = field_direction(field, point, inward).unwrap_or(inward);
+            starts.push(Start {
+                point,
+                dir,
+                end: None,
+            });
+        }
+        i += run;
+    }
+    starts
+}
+
+/// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, a point on the
+/// frame's edge where one is `None`: its first and last point), fitted and refined
 /// with both held; `None` when it cannot be fitted, is shorter than
 /// `min_cable_length_px`, reads a ridge (a cable on its background, not a step between
 /// two backgrounds) on fewer than `ended_min_ridge_share` of its profiles
-/// (`min_ridge_share`, as a cable with no end, when it leaves the frame) or lies on
+/// (`min_ridge_share`, as a cable with no end, when an end lies on the edge) or lies on
 /// cable pixels for less than `field_min_share` of its length. Its score is the mean
 /// cable probability along it.
 fn model(points: &[[f32; 2]], ids: [Option<usize>; 2], ground: Ground<'_>) -> Option<Cable> {
@@ -176,7 +293,7 @@ fn model(points: &[[f32; 2]], ids: [Option<usize>; 2], ground: Ground<'_>) -> Op
     let ridge_share = fitted.ridge_share.unwrap_or(1.0);
     if length_px < params.min_cable_length_px
         || ridge_share
-            < if ids[1].is_some() {
+            < if ids.iter().all(Option::is_some) {
                 params.ended_min_ridge_share
             } else {
                 params.min_ridge_share
@@ -213,7 +330,7 @@ fn model(points: &[[f32; 2]], ids: [Option<usize>; 2], ground: Ground<'_>) -> Op
 /// longer than the frame's perimeter first.
 fn trace(
     field: &CableField,
-    start: [f32; 2],
+    start: &Start,
     targets: &[(usize, [f32; 2])],
     found: &[(&[[f32; 2]], f32)],
     params: &Params,
@@ -229,9 +346,9 @@ fn trace(
     let ahead = |p: [f32; 2], d: [f32; 2], k: f32| [p[0] + k * step * d[0], p[1] + k * step * d[1]];
     let inside = |p: [f32; 2]| p[0] >= 0.0 && p[1] >= 0.0 && p[0] < size[0] && p[1] < size[1];
 
-    let mut dir = opening(field, start, OPENING_CELLS * cell, level)?;
-    let mut points = vec![start];
-    let mut p = start;
+    let mut dir = start.dir;
+    let mut points = vec![start.point];
+    let mut p = start.point;
     let (mut run, mut weak, mut crossed) = (0.0, 0, false);
     let max_run = 2.0 * (size[0] + size[1]);
     while run < max_run {
@@ -366,10 +483,10 @@ mod tests {
         [a.cos(), a.sin()]
     }
 
-    /// Distances of photo point `p` from the wire (along y = 60 from x = 20 to
-    /// `wire_to`) and from the bright cable (through (120, 60) along [`across`]).
-    fn distances(p: [f32; 2], wire_to: f32) -> (f32, f32) {
-        let wire = if (20.0..=wire_to).contains(&p[0]) {
+    /// Distances of photo point `p` from the wire (along y = 60 from x = `wire[0]` to
+    /// `wire[1]`) and from the bright cable (through (120, 60) along [`across`]).
+    fn distances(p: [f32; 2], wire: [f32; 2]) -> (f32, f32) {
+        let wire = if (wire[0]..=wire[1]).contains(&p[0]) {
             (p[1] - 60.0).abs()
         } else {
             f32::MAX
@@ -382,9 +499,9 @@ mod tests {
     /// A 240x120 dark grey photo with a lighter wire 4 px wide and a bright cable 8 px
     /// wide crossing it ([`distances`]), and a field that shows both (the wire at 0.8,
     /// the cable at 0.95; where both lie near a cell, its direction is their mean).
-    fn scene(wire_to: f32) -> (RgbImage, CableField) {
+    fn scene(wire: [f32; 2]) -> (RgbImage, CableField) {
         let image = RgbImage::from_fn(240, 120, |x, y| {
-            match distances([x as f32, y as f32], wire_to) {
+            match distances([x as f32, y as f32], wire) {
                 (_, c) if c <= 4.0 => Rgb([200, 200, 255]),
                 (w, _) if w <= 2.0 => Rgb([95, 95, 95]),
                 _ => Rgb([40, 40, 40]),
@@ -395,7 +512,7 @@ mod tests {
         let cells: Vec<(f32, [f32; 2])> = (0..w * h)
             .map(|i| {
                 let centre = [((i % w) as f32 + 0.5) * CELL, ((i / w) as f32 + 0.5) * CELL];
-                let (wire, cable) = distances(centre, wire_to);
+                let (wire, cable) = distances(centre, wire);
                 let mut p = 0.0f32;
                 let mut o = [0.0f32, 0.0];
                 let mut n = 0.0;
@@ -423,18 +540,18 @@ mod tests {
     }
 
     /// The cables after tracing from `ends` (none of them on a cable yet) with the
-    /// bright cable already found, the wire ending at x = 220.
+    /// bright cable already found, the wire from x = 20 to 220.
     fn traced(ends: &[[f32; 2]], params: &Params) -> (Vec<Cable>, Vec<Option<usize>>) {
-        traced_to(ends, params, 220.0)
+        traced_along(ends, params, [20.0, 220.0])
     }
 
-    /// [`traced`] with the wire running to x = `wire_to`.
-    fn traced_to(
+    /// [`traced`] with the wire from x = `wire[0]` to `wire[1]`.
+    fn traced_along(
         ends: &[[f32; 2]],
         params: &Params,
-        wire_to: f32,
+        wire: [f32; 2],
     ) -> (Vec<Cable>, Vec<Option<usize>>) {
-        let (image, field) = scene(wire_to);
+        let (image, field) = scene(wire);
         let mut lab = LabImage::from_rgb(image.as_raw(), 240, 120);
         lab.gaussian_blur(params.sigma);
         let d = across();
@@ -447,6 +564,7 @@ mod tests {
             image: &image,
             params,
             step_px: 12.0,
+            size: [240, 120],
         };
         let confidence = vec![1.0; ends.len()];
         trace_free_ends(&mut cables, &mut end_cables, ends, &confidence, ground);
@@ -497,7 +615,7 @@ mod tests {
 
     #[test]
     fn a_wire_the_field_shows_from_a_free_end_out_of_the_frame_is_traced_to_its_edge() {
-        let (cables, end_cables) = traced_to(&[[20.0, 60.0]], &Params::default(), 240.0);
+        let (cables, end_cables) = traced_along(&[[20.0, 60.0]], &Params::default(), [20.0, 240.0]);
         assert_eq!(cables.len(), 2, "one cable traced");
         let wire = &cables[1];
         assert_eq!(wire.end_indices, [Some(0), None]);
@@ -508,7 +626,37 @@ mod tests {
             "it leaves at the frame's edge: {exit:?}"
         );
         // The same end with the wire stopping short of the edge: no cable.
-        let (cables, _) = traced_to(&[[20.0, 60.0]], &Params::default(), 220.0);
+        let (cables, _) = traced_along(&[[20.0, 60.0]], &Params::default(), [20.0, 220.0]);
         assert_eq!(cables.len(), 1);
+    }
+
+    #[test]
+    fn a_wire_the_field_shows_across_the_frame_with_no_end_in_view_is_traced_edge_to_edge() {
+        let (cables, _) = traced_along(&[], &Params::default(), [0.0, 240.0]);
+        assert_eq!(cables.len(), 2, "one cable traced");
+        let wire = &cables[1];
+        assert_eq!(wire.end_indices, [None, None]);
+        let xs = wire.ends.map(|p| p[0]);
+        assert!(
+            xs.iter().any(|&x| x < 2.0) && xs.iter().any(|&x| x > 237.0),
+            "from edge to edge: {:?}",
+            wire.ends
+        );
+        let off = wire
+            .polyline
+            .iter()
+            .map(|p| (p[1] - 60.0).abs())
+            .fold(0.0, f32::max);
+        assert!(off < 2.0, "along the wire: {off} px off");
+        let no_border = Params {
+            border_cables: false,
+            ..Params::default()
+        };
+        let (cables, _) = traced_along(&[], &no_border, [0.0, 240.0]);
+        assert_eq!(
+            cables.len(),
+            1,
+            "no starts on the edge without border cables"
+        );
     }
 }
