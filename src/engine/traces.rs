@@ -39,6 +39,11 @@ const CHORD_CELLS: f32 = 3.0;
 const SURE_DIRECTION: f32 = 0.5;
 const MAX_TURN_DEG: f32 = 30.0;
 
+/// Least cosine between a start on the frame's edge and the edge's inward normal for
+/// the start to take the field's direction (a cable crossing the edge within about 75°
+/// of square); square to the edge otherwise.
+const INTO_FRAME_COS: f32 = 0.25;
+
 /// How far across its heading a trace looks for the top of the field's ridge after
 /// each step, in field cells either way.
 const RECENTRE_CELLS: f32 = 0.5;
@@ -254,7 +259,7 @@ fn border_starts(field: &CableField, size: [usize; 2], params: &Params) -> Vec<S
         let run = (i..n).take_while(|&j| on[(first_off + j) % n]).count();
         if (shortest..=longest).contains(&run) {
             let (point, inward) = ring[(first_off + i + run / 2) % n];
-            let dir = field_direction(field, point, inward).unwrap_or(inward);
+            let dir = field_direction(field, point, inward, INTO_FRAME_COS).unwrap_or(inward);
             starts.push(Start {
                 point,
                 dir,
@@ -368,7 +373,7 @@ fn trace(
             p = ahead(p, dir, 1.0);
         } else {
             crossed = false;
-            if let Some(along) = field_direction(field, p, dir) {
+            if let Some(along) = field_direction(field, p, dir, MAX_TURN_DEG.to_radians().cos()) {
                 dir = along;
             }
             let q = ahead(p, dir, 1.0);
@@ -434,9 +439,14 @@ fn opening(field: &CableField, start: [f32; 2], radius: f32, level: f32) -> Opti
 }
 
 /// The field's direction at `p` as a unit vector the way of `heading`, when the field
-/// is at least [`SURE_DIRECTION`] sure of it and it lies within [`MAX_TURN_DEG`] of
-/// `heading`.
-fn field_direction(field: &CableField, p: [f32; 2], heading: [f32; 2]) -> Option<[f32; 2]> {
+/// is at least [`SURE_DIRECTION`] sure of it and the cosine of its angle to `heading`
+/// is at least `min_cos`.
+fn field_direction(
+    field: &CableField,
+    p: [f32; 2],
+    heading: [f32; 2],
+    min_cos: f32,
+) -> Option<[f32; 2]> {
     let [c2, s2] = field.orientation_at(p[0], p[1]);
     if c2.hypot(s2) < SURE_DIRECTION {
         return None;
@@ -446,7 +456,7 @@ fn field_direction(field: &CableField, p: [f32; 2], heading: [f32; 2]) -> Option
     if d[0] * heading[0] + d[1] * heading[1] < 0.0 {
         d = [-d[0], -d[1]];
     }
-    (d[0] * heading[0] + d[1] * heading[1] >= MAX_TURN_DEG.to_radians().cos()).then_some(d)
+    (d[0] * heading[0] + d[1] * heading[1] >= min_cos).then_some(d)
 }
 
 /// The direction from the point of `points` `span` (pixels, along the line) before
@@ -658,5 +668,29 @@ mod tests {
             1,
             "no starts on the edge without border cables"
         );
+    }
+
+    #[test]
+    fn a_trace_from_the_frame_s_edge_sets_off_along_the_cable_crossing_it() {
+        // No wire: the bright cable alone crosses the top and bottom edges at 55° to
+        // their normals.
+        let (_, field) = scene([0.0, 0.0]);
+        let starts = border_starts(&field, [240, 120], &Params::default());
+        assert_eq!(starts.len(), 2, "one start where it crosses each edge");
+        let d = across();
+        for start in &starts {
+            let inward = if start.point[1] < 60.0 { 1.0 } else { -1.0 };
+            assert!(
+                start.dir[1] * inward > 0.0,
+                "into the frame: {:?}",
+                start.dir
+            );
+            let along = (start.dir[0] * d[0] + start.dir[1] * d[1]).abs();
+            assert!(
+                along > 0.95,
+                "along the cable, not square to the edge: {:?}",
+                start.dir
+            );
+        }
     }
 }
