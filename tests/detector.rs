@@ -297,9 +297,9 @@ fn cables_too_wide_for_the_network_are_found_at_a_smaller_scale() {
 /// so no width is read to correct the scale by. Looked at once more at half the size
 /// (`empty_rescale`), the yellow cable is found, and the photo is then segmented at the
 /// scale its width asks for (README, "Any camera"). The white one stays lost. Both runs
-/// leave the traces in the field out (`field_trace_level` 1): a trace from where the
-/// yellow cable meets the frame's edge finds it in the first pass, so that the photo is
-/// never empty (README, "A wire no superpixel follows").
+/// leave the traces in the field out (`field_trace_level` 1): traces from where the
+/// cables meet the frame's edge find two cables in the first pass, so that the photo
+/// is never empty (README, "A wire no superpixel follows").
 #[test]
 fn a_photo_in_which_nothing_is_found_is_looked_at_smaller() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)
