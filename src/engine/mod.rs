@@ -8,8 +8,8 @@
 //! makes every superpixel one region, [`scale`] brings photos to the working size, [`cable`]
 //! models one cable from its walk, [`border`] finds cables with no end in view,
 //! [`loops`] takes in the loop a cable was walked across where it crosses itself,
-//! [`traces`] follows the field from ends no walk found a cable from and from the
-//! frame's edge,
+//! [`traces`] follows the field from ends no walk found a cable from, from the
+//! frame's edge and on from where a walk was lost,
 //! [`twins`] splits a cable found over two of one colour laid together,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable

@@ -10,7 +10,8 @@
 //! mixes both cables'), until the trace fades, arrives at an end with no cable or
 //! leaves the frame. A trace that arrives or leaves is fitted and refined on the photo
 //! like a walked cable, and kept when it reads as a cable there and does not repeat one
-//! already found.
+//! already found. Before them, a cable whose walk was lost short of an end and of the
+//! frame runs on the same way from where it was lost ([`run_on_lost`]).
 
 use image::RgbImage;
 
@@ -130,6 +131,7 @@ pub(super) fn trace_free_ends(
     if params.border_cables {
         starts.extend(border_starts(ground.field, ground.size, params));
     }
+    run_on_lost(cables, end_cables, &free, ends, ground);
     for start in starts {
         if start.end.is_some_and(|a| end_cables[a].is_some()) {
             continue;
@@ -147,6 +149,104 @@ pub(super) fn trace_free_ends(
             end_cables[i] = Some(id);
         }
         cables.push(Cable { id, ..cable });
+    }
+}
+
+/// Runs on along the field the cables whose walk was lost short of an end and of the
+/// frame (an end of `cables` that is no given end and lies more than
+/// `border_margin_px` inside the frame): from there, a trace the way the cable was
+/// heading over its last [`CHORD_CELLS`] cells, to one of the `free` ends (indices into
+/// `ends`) with no cable yet or out of the frame, at least `min_cable_length_px` on,
+/// repeating no other cable, and for a cable with no given end, along which the field
+/// is sure of a cable (a mean cable probability of at least `field_border_sure_level`:
+/// the grout of a tiled floor can read as an unsure cable); the cable is then modelled
+/// again over both, its score kept.
+fn run_on_lost(
+    cables: &mut [Cable],
+    end_cables: &mut [Option<usize>],
+    free: &[usize],
+    ends: &[[f32; 2]],
+    ground: Ground<'_>,
+) {
+    let (field, params) = (ground.field, ground.params);
+    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let [w, h] = ground.size.map(|v| v as f32);
+    let margin = params.border_margin_px;
+    for k in 0..cables.len() {
+        for side in 0..2 {
+            let cable = &cables[k];
+            let mut line = cable.polyline.clone();
+            if side == 0 {
+                line.reverse();
+            }
+            let end = line[line.len() - 1];
+            if cable.end_indices[side].is_some()
+                || end[0]
+                    .min(end[1])
+                    .min(w - 1.0 - end[0])
+                    .min(h - 1.0 - end[1])
+                    < margin
+            {
+                continue;
+            }
+            let dir = unit_or(chord(&line, CHORD_CELLS * cell), [0.0, 0.0]);
+            if dir == [0.0, 0.0] {
+                continue;
+            }
+            let targets: Vec<(usize, [f32; 2])> = free
+                .iter()
+                .filter(|&&b| end_cables[b].is_none())
+                .map(|&b| (b, ends[b]))
+                .collect();
+            let others: Vec<(&[[f32; 2]], f32)> = cables
+                .iter()
+                .filter(|c| c.id != cable.id)
+                .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
+                .collect();
+            let start = Start {
+                point: end,
+                dir,
+                end: None,
+            };
+            let Some((far, points)) = trace(field, &start, &targets, &others, params) else {
+                continue;
+            };
+            let sure = || {
+                let sum: f32 = points.iter().map(|p| field.cable_at(p[0], p[1])).sum();
+                sum / points.len() as f32 >= params.field_border_sure_level
+            };
+            if polyline_length(&points) < params.min_cable_length_px
+                || (cable.end_indices[1 - side].is_none() && !sure())
+            {
+                continue;
+            }
+            let beside: Vec<(&[[f32; 2]], f32)> = cables
+                .iter()
+                .filter(|c| c.id != cable.id)
+                .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
+                .collect();
+            if points_near_any(&points, &beside) as f32 > MAX_SHARED * points.len() as f32 {
+                continue;
+            }
+            line.extend_from_slice(&points[1..]);
+            let mut ids = [cable.end_indices[1 - side], far];
+            if side == 0 {
+                line.reverse();
+                ids.reverse();
+            }
+            let Some(longer) = model(&line, ids, ground) else {
+                continue;
+            };
+            if let Some(b) = far {
+                end_cables[b] = Some(cable.id);
+            }
+            cables[k] = Cable {
+                id: cable.id,
+                score: cable.score,
+                twin_ends: cable.twin_ends,
+                ..longer
+            };
+        }
     }
 }
 
@@ -549,6 +649,15 @@ mod tests {
         (image, field)
     }
 
+    /// How far the centreline of `cable` strays from the wire's line y = 60, pixels.
+    fn off_the_wire(cable: &Cable) -> f32 {
+        cable
+            .polyline
+            .iter()
+            .map(|p| (p[1] - 60.0).abs())
+            .fold(0.0, f32::max)
+    }
+
     /// The cables after tracing from `ends` (none of them on a cable yet) with the
     /// bright cable already found, the wire from x = 20 to 220.
     fn traced(ends: &[[f32; 2]], params: &Params) -> (Vec<Cable>, Vec<Option<usize>>) {
@@ -589,11 +698,7 @@ mod tests {
         let wire = &cables[1];
         assert_eq!(wire.end_indices, [Some(0), Some(1)]);
         assert_eq!(end_cables, vec![Some(1), Some(1)]);
-        let off = wire
-            .polyline
-            .iter()
-            .map(|p| (p[1] - 60.0).abs())
-            .fold(0.0, f32::max);
+        let off = off_the_wire(wire);
         assert!(
             off < 2.0,
             "the trace keeps to the wire across the cable: {off} px off"
@@ -652,11 +757,7 @@ mod tests {
             "from edge to edge: {:?}",
             wire.ends
         );
-        let off = wire
-            .polyline
-            .iter()
-            .map(|p| (p[1] - 60.0).abs())
-            .fold(0.0, f32::max);
+        let off = off_the_wire(wire);
         assert!(off < 2.0, "along the wire: {off} px off");
         let no_border = Params {
             border_cables: false,
@@ -692,5 +793,47 @@ mod tests {
                 start.dir
             );
         }
+    }
+
+    #[test]
+    fn a_cable_whose_walk_was_lost_runs_on_along_the_field_out_of_the_frame() {
+        let params = Params::default();
+        let (image, field) = scene([20.0, 240.0]);
+        let mut lab = LabImage::from_rgb(image.as_raw(), 240, 120);
+        lab.gaussian_blur(params.sigma);
+        let d = across();
+        let through = [-1.0, 1.0].map(|t: f32| [120.0 + 80.0 * t * d[0], 60.0 + 80.0 * t * d[1]]);
+        // The wire found from its end at x = 20, its walk lost at x = 40.
+        let mut cables = vec![
+            straight(0, through, [None, None]),
+            straight(1, [[20.0, 60.0], [40.0, 60.0]], [Some(0), None]),
+        ];
+        let mut end_cables = vec![Some(1)];
+        let ground = Ground {
+            field: &field,
+            lab: &lab,
+            image: &image,
+            params: &params,
+            step_px: 12.0,
+            size: [240, 120],
+        };
+        trace_free_ends(
+            &mut cables,
+            &mut end_cables,
+            &[[20.0, 60.0]],
+            &[1.0],
+            ground,
+        );
+        assert_eq!(cables.len(), 2, "no cable of its own");
+        let wire = &cables[1];
+        assert_eq!(wire.end_indices, [Some(0), None]);
+        assert!(
+            wire.ends[1][0] > 237.0,
+            "run on to the frame's edge: {:?}",
+            wire.ends
+        );
+        assert_eq!(wire.score, 0.5, "its score kept");
+        let off = off_the_wire(wire);
+        assert!(off < 2.0, "along the wire, across the cable: {off} px off");
     }
 }

@@ -389,8 +389,8 @@ pub struct Params {
     /// Cable probability a trace in the field follows from an end that no walk found a
     /// cable from, or from where the field's cables meet the frame's edge with no cable
     /// found there, to another such end or out of the frame (a thin dark wire on a dark
-    /// card, along which no superpixel runs; README, "How the engine uses the field").
-    /// 1 or more: no traces.
+    /// card, along which no superpixel runs), and from where a cable's walk was lost
+    /// (README, "How the engine uses the field"). 1 or more: no traces.
     pub field_trace_level: f32,
 }
 
