@@ -31,6 +31,10 @@ const STEP_CELLS: f32 = 0.5;
 /// stops turning with the field (whose direction there mixes both cables').
 const CROSSING_CELLS: f32 = 1.5;
 
+/// Largest angle between a trace and a cable found near it, degrees, at which the
+/// trace runs alongside that cable (repeats it there) rather than crossing it.
+const ALONGSIDE_DEG: f32 = 30.0;
+
 /// Length of the trace behind it, in field cells, whose direction a trace keeps
 /// across a cable already found.
 const CHORD_CELLS: f32 = 3.0;
@@ -65,7 +69,8 @@ const OPENING_CELLS: f32 = 2.0;
 /// Directions tried on that ring.
 const OPENING_DIRECTIONS: usize = 48;
 
-/// Share of a trace's centreline near cables already found from which it repeats one.
+/// Share of a trace's centreline alongside cables already found ([`points_alongside`])
+/// from which it repeats one.
 const MAX_SHARED: f32 = 0.3;
 
 /// Everything a trace reads.
@@ -95,8 +100,8 @@ pub(super) struct Ground<'a> {
 /// in view, or `border_seed_confidence` when it has none; it is kept from the floor of
 /// every cable with a field (`field_min_cable_score`; `field_border_min_score` with no
 /// end in view) when no more than [`MAX_SHARED`] of it lies within a field cell past
-/// their half widths of a cable already found, and, with no end in view, when it does
-/// not run all along one side of the frame.
+/// their half widths of a cable already found and runs its way, and, with no end in
+/// view, when it does not run all along one side of the frame.
 pub(super) fn trace_free_ends(
     cables: &mut Vec<Cable>,
     end_cables: &mut [Option<usize>],
@@ -225,7 +230,7 @@ fn run_on_lost(
                 .filter(|c| c.id != cable.id)
                 .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
                 .collect();
-            if points_near_any(&points, &beside) as f32 > MAX_SHARED * points.len() as f32 {
+            if points_alongside(&points, &beside) as f32 > MAX_SHARED * points.len() as f32 {
                 continue;
             }
             line.extend_from_slice(&points[1..]);
@@ -294,7 +299,7 @@ fn follow(
         .iter()
         .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
         .collect();
-    let shared = points_near_any(&cable.polyline, &found) as f32;
+    let shared = points_alongside(&cable.polyline, &found) as f32;
     let given: Vec<f32> = ids.into_iter().flatten().map(|i| confidence[i]).collect();
     cable.score *= match given[..] {
         [a, b] => (a * b).sqrt(),
@@ -557,6 +562,30 @@ fn field_direction(
         d = [-d[0], -d[1]];
     }
     (d[0] * heading[0] + d[1] * heading[1] >= min_cos).then_some(d)
+}
+
+/// How many points of `line` lie within its tolerance of a point of one of `found`
+/// (each with its tolerance) where that line runs within [`ALONGSIDE_DEG`] of `line`'s
+/// direction: a crossing, however shallow, shares only the points where the two run
+/// the same way.
+fn points_alongside(line: &[[f32; 2]], found: &[(&[[f32; 2]], f32)]) -> usize {
+    let alongside = ALONGSIDE_DEG.to_radians().cos();
+    let direction = |l: &[[f32; 2]], i: usize| {
+        let (a, b) = (l[i.saturating_sub(1)], l[(i + 1).min(l.len() - 1)]);
+        unit_or([b[0] - a[0], b[1] - a[1]], [0.0, 0.0])
+    };
+    (0..line.len())
+        .filter(|&i| {
+            let d = direction(line, i);
+            found.iter().any(|&(other, tolerance)| {
+                (0..other.len()).any(|j| {
+                    let e = direction(other, j);
+                    dist(line[i], other[j]) <= tolerance
+                        && (d[0] * e[0] + d[1] * e[1]).abs() >= alongside
+                })
+            })
+        })
+        .count()
 }
 
 /// The direction from the point of `points` `span` (pixels, along the line) before
@@ -835,5 +864,19 @@ mod tests {
         assert_eq!(wire.score, 0.5, "its score kept");
         let off = off_the_wire(wire);
         assert!(off < 2.0, "along the wire, across the cable: {off} px off");
+    }
+
+    #[test]
+    fn a_line_shares_with_a_cable_found_only_where_it_runs_its_way() {
+        let line: Vec<[f32; 2]> = (0..=100).map(|x| [x as f32 * 2.0, 60.0]).collect();
+        let d = across();
+        let crossing: Vec<[f32; 2]> = (-50..=50)
+            .map(|t| [100.0 + 2.0 * t as f32 * d[0], 60.0 + 2.0 * t as f32 * d[1]])
+            .collect();
+        let parallel: Vec<[f32; 2]> = (0..=50).map(|x| [x as f32 * 2.0, 66.0]).collect();
+        assert_eq!(points_alongside(&line, &[(&crossing, 16.0)]), 0);
+        // The 51 points up to x = 100, 6 px beside it, and the 7 next within 16 px of
+        // its end.
+        assert_eq!(points_alongside(&line, &[(&parallel, 16.0)]), 58);
     }
 }
