@@ -323,8 +323,9 @@ fn follow(
 /// Where the field's cables meet the frame's edge: one start in the middle of every run
 /// of edge pixels whose cable probability reaches `field_trace_level`, as long as a
 /// cable crossing (`border_min_crossing_px` ..= `border_max_crossing_px`), heading
-/// into the frame along the field's direction there where it is sure of one (square
-/// to the edge otherwise). `size` is the image's width and height.
+/// into the frame along the field's direction there where it is sure of one and that
+/// points into the frame ([`INTO_FRAME_COS`]), square to the edge otherwise. `size` is
+/// the image's width and height.
 fn border_starts(field: &CableField, size: [usize; 2], params: &Params) -> Vec<Start> {
     let [w, h] = size.map(|v| v as f32);
     // The edge pixels' centres, clockwise from the top left corner, with the inward
