@@ -21,7 +21,7 @@ use super::walk::{self, Seed, Walk, WalkEnd};
 use super::{EngineError, Params};
 
 /// The perimeter pixels in clockwise order from the top-left corner, once each.
-fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
+pub(super) fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
     let mut out = Vec::with_capacity(2 * (w + h));
     out.extend((0..w).map(|x| [x, 0]));
     out.extend((1..h).map(|y| [w - 1, y]));
@@ -284,10 +284,6 @@ fn seeds_where(
     let ring = perimeter(w, h);
     let labels: Vec<u32> = ring.iter().map(|&[x, y]| sp.labels[y * w + x]).collect();
     let stands_out = stands_out(&ring, &labels);
-    let n = ring.len();
-    let Some(start) = (0..n).find(|&i| !stands_out[i]) else {
-        return (Vec::new(), 0);
-    };
     let (shortest, longest) = (
         params.border_min_crossing_px as usize,
         params.border_max_crossing_px as usize,
@@ -295,15 +291,8 @@ fn seeds_where(
     let longest_start = (params.border_max_start_px as usize).max(longest);
     let mut seeds = Vec::new();
     let mut starts = Vec::new();
-    let mut i = 0;
-    while i < n {
-        if !stands_out[(start + i) % n] {
-            i += 1;
-            continue;
-        }
-        let run = (i..n).take_while(|&j| stands_out[(start + j) % n]).count();
+    for (mid, run) in marked_runs(&stands_out) {
         if (shortest..=longest_start).contains(&run) {
-            let mid = (start + i + run / 2) % n;
             let [x, y] = ring[mid];
             let seed = Seed {
                 point: [x as f32, y as f32],
@@ -315,11 +304,33 @@ fn seeds_where(
                 starts.push(seed);
             }
         }
-        i += run;
     }
     let crossings = seeds.len();
     seeds.extend(starts);
     (seeds, crossings)
+}
+
+/// The runs of marked positions around a ring (`marked[i]` for its i-th position; a
+/// run may wrap past the ring's start), in ring order from its first unmarked
+/// position, each as the index of its middle and its length; none when every position
+/// is marked.
+pub(super) fn marked_runs(marked: &[bool]) -> Vec<(usize, usize)> {
+    let n = marked.len();
+    let Some(start) = (0..n).find(|&i| !marked[i]) else {
+        return Vec::new();
+    };
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while i < n {
+        if !marked[(start + i) % n] {
+            i += 1;
+            continue;
+        }
+        let run = (i..n).take_while(|&j| marked[(start + j) % n]).count();
+        runs.push(((start + i + run / 2) % n, run));
+        i += run;
+    }
+    runs
 }
 
 #[cfg(test)]

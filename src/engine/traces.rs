@@ -16,11 +16,12 @@
 use image::RgbImage;
 
 use super::Params;
+use super::border::{marked_runs, perimeter};
 use super::cable::{Cable, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::CableField;
 use super::geometry::{
-    along_one_side, border_exit, dist, points_near_any, polyline_length, unit_or,
+    along_one_side, border_exit, dist, heading, points_near_any, polyline_length, unit_or,
 };
 
 /// A trace's step, in field cells: fine enough to follow a bend of a cable a few cells
@@ -113,7 +114,7 @@ pub(super) fn trace_free_ends(
     if params.field_trace_level >= 1.0 {
         return;
     }
-    let cell = 0.5 * (ground.field.cell_px[0] + ground.field.cell_px[1]);
+    let cell = cell_side(ground.field);
     let free: Vec<usize> = (0..ends.len())
         .filter(|&i| end_cables[i].is_none())
         .collect();
@@ -174,7 +175,7 @@ fn run_on_lost(
     ground: Ground<'_>,
 ) {
     let (field, params) = (ground.field, ground.params);
-    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let cell = cell_side(field);
     let [w, h] = ground.size.map(|v| v as f32);
     let margin = params.border_margin_px;
     for k in 0..cables.len() {
@@ -194,20 +195,16 @@ fn run_on_lost(
             {
                 continue;
             }
-            let dir = unit_or(chord(&line, CHORD_CELLS * cell), [0.0, 0.0]);
-            if dir == [0.0, 0.0] {
+            if line.len() < 2 {
                 continue;
             }
+            let dir = heading(&line, CHORD_CELLS * cell);
             let targets: Vec<(usize, [f32; 2])> = free
                 .iter()
                 .filter(|&&b| end_cables[b].is_none())
                 .map(|&b| (b, ends[b]))
                 .collect();
-            let others: Vec<(&[[f32; 2]], f32)> = cables
-                .iter()
-                .filter(|c| c.id != cable.id)
-                .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
-                .collect();
+            let others = crossing_zones(cables, Some(cable.id), cell);
             let start = Start {
                 point: end,
                 dir,
@@ -225,12 +222,7 @@ fn run_on_lost(
             {
                 continue;
             }
-            let beside: Vec<(&[[f32; 2]], f32)> = cables
-                .iter()
-                .filter(|c| c.id != cable.id)
-                .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
-                .collect();
-            if points_alongside(&points, &beside) as f32 > MAX_SHARED * points.len() as f32 {
+            if repeats(&points, cable.width_px, cables, Some(cable.id), cell) {
                 continue;
             }
             line.extend_from_slice(&points[1..]);
@@ -255,6 +247,40 @@ fn run_on_lost(
     }
 }
 
+/// The lines of `cables` (but the one of id `except`), each with the reach within
+/// which a trace near it crosses it: its half width and [`CROSSING_CELLS`] cells of
+/// `cell` pixels.
+fn crossing_zones(cables: &[Cable], except: Option<usize>, cell: f32) -> Vec<(&[[f32; 2]], f32)> {
+    cables
+        .iter()
+        .filter(|c| Some(c.id) != except)
+        .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
+        .collect()
+}
+
+/// Whether `line`, a cable `width` pixels wide, repeats one of `cables` (but the one
+/// of id `except`): more than [`MAX_SHARED`] of its points lie within a cell (`cell`
+/// pixels) past their half widths of one of them and run its way ([`points_alongside`]).
+fn repeats(
+    line: &[[f32; 2]],
+    width: f32,
+    cables: &[Cable],
+    except: Option<usize>,
+    cell: f32,
+) -> bool {
+    let found: Vec<(&[[f32; 2]], f32)> = cables
+        .iter()
+        .filter(|c| Some(c.id) != except)
+        .map(|c| (&c.polyline[..], 0.5 * (c.width_px + width) + cell))
+        .collect();
+    points_alongside(line, &found) as f32 > MAX_SHARED * line.len() as f32
+}
+
+/// The mean side of one of `field`'s cells, pixels.
+fn cell_side(field: &CableField) -> f32 {
+    0.5 * (field.cell_px[0] + field.cell_px[1])
+}
+
 /// Where a trace starts: a point, the way it sets off, and the given end it is, if any
 /// (otherwise a point on the frame's edge).
 struct Start {
@@ -274,17 +300,14 @@ fn follow(
     ground: Ground<'_>,
 ) -> Option<Cable> {
     let (field, params) = (ground.field, ground.params);
-    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let cell = cell_side(field);
     let min_apart = params.field_orphan_min_steps * ground.step_px;
     let targets: Vec<(usize, [f32; 2])> = targets
         .iter()
         .copied()
         .filter(|&(_, t)| dist(start.point, t) >= min_apart)
         .collect();
-    let crossed: Vec<(&[[f32; 2]], f32)> = cables
-        .iter()
-        .map(|c| (&c.polyline[..], 0.5 * c.width_px + CROSSING_CELLS * cell))
-        .collect();
+    let crossed = crossing_zones(cables, None, cell);
     // Where a cable found meets the edge, the field's run is that cable's.
     if start.end.is_none() && points_near_any(&[start.point], &crossed) > 0 {
         return None;
@@ -295,11 +318,7 @@ fn follow(
     }
     let ids = [start.end, far];
     let mut cable = model(&points, ids, ground)?;
-    let found: Vec<(&[[f32; 2]], f32)> = cables
-        .iter()
-        .map(|c| (&c.polyline[..], 0.5 * (c.width_px + cable.width_px) + cell))
-        .collect();
-    let shared = points_alongside(&cable.polyline, &found) as f32;
+    let repeated = repeats(&cable.polyline, cable.width_px, cables, None, cell);
     let given: Vec<f32> = ids.into_iter().flatten().map(|i| confidence[i]).collect();
     cable.score *= match given[..] {
         [a, b] => (a * b).sqrt(),
@@ -314,7 +333,7 @@ fn follow(
         },
         ground.size,
     );
-    let kept = shared <= MAX_SHARED * cable.polyline.len() as f32
+    let kept = !repeated
         && cable.score >= floor
         && !(given.is_empty() && along_one_side(&cable.polyline, w, h, params.border_margin_px));
     kept.then_some(cable)
@@ -327,54 +346,42 @@ fn follow(
 /// points into the frame ([`INTO_FRAME_COS`]), square to the edge otherwise. `size` is
 /// the image's width and height.
 fn border_starts(field: &CableField, size: [usize; 2], params: &Params) -> Vec<Start> {
-    let [w, h] = size.map(|v| v as f32);
+    let [w, h] = size;
     // The edge pixels' centres, clockwise from the top left corner, with the inward
-    // normal of their side.
-    let mut ring: Vec<([f32; 2], [f32; 2])> = Vec::new();
-    ring.extend((0..size[0]).map(|x| ([x as f32 + 0.5, 0.5], [0.0, 1.0])));
-    ring.extend((1..size[1]).map(|y| ([w - 0.5, y as f32 + 0.5], [-1.0, 0.0])));
-    ring.extend(
-        (1..size[0])
-            .rev()
-            .map(|x| ([x as f32 - 0.5, h - 0.5], [0.0, -1.0])),
-    );
-    ring.extend(
-        (1..size[1] - 1)
-            .rev()
-            .map(|y| ([0.5, y as f32 + 0.5], [1.0, 0.0])),
-    );
+    // normal of their side (a corner counts to the side the ring reaches it along).
+    let ring: Vec<([f32; 2], [f32; 2])> = perimeter(w, h)
+        .into_iter()
+        .map(|[x, y]| {
+            let inward = if y == 0 {
+                [0.0, 1.0]
+            } else if x == w - 1 {
+                [-1.0, 0.0]
+            } else if y == h - 1 {
+                [0.0, -1.0]
+            } else {
+                [1.0, 0.0]
+            };
+            ([x as f32 + 0.5, y as f32 + 0.5], inward)
+        })
+        .collect();
     let on: Vec<bool> = ring
         .iter()
         .map(|(p, _)| field.cable_at(p[0], p[1]) >= params.field_trace_level)
         .collect();
-    let n = ring.len();
-    let Some(first_off) = (0..n).find(|&i| !on[i]) else {
-        return Vec::new();
-    };
-    let (shortest, longest) = (
-        params.border_min_crossing_px as usize,
-        params.border_max_crossing_px as usize,
-    );
-    let mut starts = Vec::new();
-    let mut i = 0;
-    while i < n {
-        if !on[(first_off + i) % n] {
-            i += 1;
-            continue;
-        }
-        let run = (i..n).take_while(|&j| on[(first_off + j) % n]).count();
-        if (shortest..=longest).contains(&run) {
-            let (point, inward) = ring[(first_off + i + run / 2) % n];
+    let crossing = params.border_min_crossing_px as usize..=params.border_max_crossing_px as usize;
+    marked_runs(&on)
+        .into_iter()
+        .filter(|(_, run)| crossing.contains(run))
+        .map(|(mid, _)| {
+            let (point, inward) = ring[mid];
             let dir = field_direction(field, point, inward, INTO_FRAME_COS).unwrap_or(inward);
-            starts.push(Start {
+            Start {
                 point,
                 dir,
                 end: None,
-            });
-        }
-        i += run;
-    }
-    starts
+            }
+        })
+        .collect()
 }
 
 /// The cable along `points` (a trace from end `ids[0]` to end `ids[1]`, a point on the
@@ -447,7 +454,7 @@ fn trace(
     params: &Params,
 ) -> Option<(Option<usize>, Vec<[f32; 2]>)> {
     let level = params.field_trace_level;
-    let cell = 0.5 * (field.cell_px[0] + field.cell_px[1]);
+    let cell = cell_side(field);
     let step = STEP_CELLS * cell;
     let size = [
         field.width as f32 * field.cell_px[0],
@@ -473,7 +480,9 @@ fn trace(
             .any(|&x| points_near_any(&[x], found) > 0);
         if near_found {
             if !crossed {
-                dir = unit_or(chord(&points, CHORD_CELLS * cell), dir);
+                if points.len() > 1 {
+                    dir = heading(&points, CHORD_CELLS * cell);
+                }
                 crossed = true;
             }
             p = ahead(p, dir, 1.0);
@@ -587,24 +596,6 @@ fn points_alongside(line: &[[f32; 2]], found: &[(&[[f32; 2]], f32)]) -> usize {
             })
         })
         .count()
-}
-
-/// The direction from the point of `points` `span` (pixels, along the line) before
-/// its last to its last: the zero vector for fewer than two points.
-fn chord(points: &[[f32; 2]], span: f32) -> [f32; 2] {
-    let Some(&last) = points.last() else {
-        return [0.0, 0.0];
-    };
-    let mut run = 0.0;
-    let mut from = last;
-    for w in points.windows(2).rev() {
-        from = w[0];
-        run += dist(w[0], w[1]);
-        if run >= span {
-            break;
-        }
-    }
-    [last[0] - from[0], last[1] - from[1]]
 }
 
 #[cfg(test)]
