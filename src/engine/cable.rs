@@ -7,7 +7,7 @@ use super::Params;
 use super::chains::Course;
 use super::color::LabImage;
 use super::field::CableField;
-use super::geometry::{border_exit, dist, heading, median, polyline_length};
+use super::geometry::{border_exit, crosses_itself, dist, heading, median, polyline_length};
 use super::graph::Graph;
 use super::pairing::{FarEnd, Pairing};
 use super::refine;
@@ -191,11 +191,22 @@ pub(super) struct Fitted {
     pub ridge_share: Option<f32>,
 }
 
+/// Shortest loop, nominal widths along its course (a circle about 2 widths across:
+/// tighter than a cable bends).
+pub(super) const LOOP_MIN_WIDTHS: f32 = 12.0;
+/// A cable that crosses itself (round a loop at least [`LOOP_MIN_WIDTHS`] long) is
+/// fitted with knots this share of `knot_spacing_px` apart: a loop is tighter than the
+/// bends the spacing is made for (one of 30 px in radius, fitted with the usual knots,
+/// shrank to a third of its size; one of 40 px read half a cable's width inside it).
+const LOOP_KNOT_SHARE: f32 = 0.5;
+
 /// The spline through `points` (fit weights `weights`), then, with `params.refine`,
 /// `refine_passes` times refined on `lab` and fitted again; `anchors` (a point and its
 /// weight) hold the first and the last point where they are through every pass: a
 /// given end exactly, an exit on the frame's edge (profiles cannot be read past the
-/// frame, and the refinement would otherwise carry the last points out of it).
+/// frame, and the refinement would otherwise carry the last points out of it). Knots
+/// lie `knot_spacing_px` apart along the points, [`LOOP_KNOT_SHARE`] of that where
+/// they cross themselves.
 pub(super) fn fit_refined(
     points: &[[f32; 2]],
     weights: &[f32],
@@ -203,7 +214,12 @@ pub(super) fn fit_refined(
     lab: &LabImage,
     params: &Params,
 ) -> Option<Fitted> {
-    let mut spline = BSpline::fit(points, weights, params.knot_spacing_px, params.smoothing)?;
+    let knots = if crosses_itself(points, LOOP_MIN_WIDTHS * params.nominal_width_px) {
+        LOOP_KNOT_SHARE * params.knot_spacing_px
+    } else {
+        params.knot_spacing_px
+    };
+    let mut spline = BSpline::fit(points, weights, knots, params.smoothing)?;
     let mut polyline = spline.sample(params.polyline_step_px);
     let (mut width, mut ridge_share) = (None, None);
     if params.refine {
@@ -220,7 +236,7 @@ pub(super) fn fit_refined(
                     w[i] = weight;
                 }
             }
-            spline = BSpline::fit(&pts, &w, params.knot_spacing_px, params.smoothing)?;
+            spline = BSpline::fit(&pts, &w, knots, params.smoothing)?;
             polyline = spline.sample(params.polyline_step_px);
         }
     }

@@ -128,6 +128,35 @@ pub fn border_exit(
     (t.is_finite() && t > 0.5 && t <= max_px).then(|| [from[0] + t * dir[0], from[1] + t * dir[1]])
 }
 
+/// Arc length along `line` at each of its points.
+pub fn arc_lengths(line: &[[f32; 2]]) -> Vec<f32> {
+    std::iter::once(0.0)
+        .chain(line.windows(2).scan(0.0, |s, w| {
+            *s += dist(w[0], w[1]);
+            Some(*s)
+        }))
+        .collect()
+}
+
+/// Whether `line` crosses itself: two of its segments at least `min_apart` pixels apart
+/// along it (a loop at least that long between them) intersect.
+pub fn crosses_itself(line: &[[f32; 2]], min_apart: f32) -> bool {
+    let arc = arc_lengths(line);
+    let cross = |a: [f32; 2], b: [f32; 2], p: [f32; 2]| {
+        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+    };
+    let n = line.len();
+    (0..n.saturating_sub(1)).any(|i| {
+        let (a, b) = (line[i], line[i + 1]);
+        (i + 1..n - 1)
+            .filter(|&j| arc[j] - arc[i + 1] >= min_apart)
+            .any(|j| {
+                let (c, d) = (line[j], line[j + 1]);
+                cross(a, b, c) * cross(a, b, d) < 0.0 && cross(c, d, a) * cross(c, d, b) < 0.0
+            })
+    })
+}
+
 /// True when every point of `line` lies within `margin` of one and the same side of a
 /// `width` x `height` image (false for an empty line).
 pub fn along_one_side(line: &[[f32; 2]], width: usize, height: usize, margin: f32) -> bool {
@@ -179,5 +208,24 @@ mod tests {
         ));
         assert!(along_one_side(&[[1.0, 1.0], [1.0, 48.0]], 100, 50, 5.0));
         assert!(!along_one_side(&[], 100, 50, 5.0));
+    }
+
+    #[test]
+    fn a_line_round_a_loop_crosses_itself() {
+        // Along y = 0 to x = 100, round most of a circle of radius 20 above it, then
+        // down across the way in (at x = 73): a loop about 150 px long.
+        let mut line: Vec<[f32; 2]> = (0..=10).map(|k| [10.0 * k as f32, 0.0]).collect();
+        line.extend((1..=11).map(|k| {
+            let t = std::f32::consts::PI * (0.5 + 1.5 * k as f32 / 11.0);
+            [80.0 + 20.0 * t.cos(), -20.0 - 20.0 * t.sin()]
+        }));
+        line.extend([[60.0, 10.0], [60.0, 30.0]]);
+        assert!(crosses_itself(&line, 50.0));
+        // Not counted where the loop is shorter than asked for.
+        assert!(!crosses_itself(&line, 400.0));
+        // A bend that does not come back: no crossing.
+        assert!(!crosses_itself(&line[..15], 10.0));
+        assert!(!crosses_itself(&[], 10.0));
+        assert!(!crosses_itself(&[[0.0, 0.0]], 10.0));
     }
 }

@@ -19,20 +19,17 @@ use std::collections::BinaryHeap;
 
 use super::Cable;
 use super::Params;
-use super::cable::{Fitted, fit_refined, median_rgb};
+use super::cable::{Fitted, LOOP_MIN_WIDTHS, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
 use super::geometry::{
-    dist, dist3, median_colour_of, points_near, points_near_any, polyline_length,
+    arc_lengths, dist, dist3, median_colour_of, points_near, points_near_any, polyline_length,
 };
 use super::graph::Graph;
 use super::spline::resample;
 use super::superpixels::Superpixels;
 use super::walk::Seed;
 
-/// Shortest loop, nominal widths along its course (a circle about 2 widths across:
-/// tighter than a cable bends).
-const MIN_LENGTH: f32 = 12.0;
 /// Where a loop leaves its cable and where it comes back lie at most this many
 /// nominal widths apart along the cable (the crossing, and the stretch either side of
 /// it where the two branches still touch at a shallow crossing).
@@ -50,10 +47,6 @@ const MIN_ROUNDNESS: f32 = 0.4;
 /// superpixels along the rest of the cable, so that the fit's smoothing, made for
 /// bends no tighter than a cable's usual ones, does not shrink the loop.
 const LOOP_SPACING_PX: f32 = 2.0;
-/// A looped cable is fitted with knots this share of `knot_spacing_px` apart: a loop
-/// is tighter than the bends the spacing is made for (one of 30 px in radius, fitted
-/// with the usual knots, shrank to a third of its size).
-const LOOP_KNOT_SHARE: f32 = 0.5;
 /// Most of the loop's course that may lie along other cables (those crossing it).
 const ALONG_SHARE: f32 = 0.4;
 /// A cable with at most this share of its length away from the loop is the loop
@@ -199,7 +192,7 @@ struct LoopCourse {
 /// longest of the cheapest courses ([`cheapest`], [`COURSE_DE`]) over superpixels the
 /// field calls cable (`strictness`) and the cable does not cover,
 /// between two that touch the cable at most [`MAX_SPAN`] apart along it and
-/// [`END_MARGIN`] from its ends, at least [`MIN_LENGTH`] long, reaching [`MIN_REACH`]
+/// [`END_MARGIN`] from its ends, at least [`LOOP_MIN_WIDTHS`] long, reaching [`MIN_REACH`]
 /// from the crossing, at least [`MIN_ROUNDNESS`] round, all in view, with no given
 /// end on it and of the cable's colour (`strictness`).
 fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Option<LoopCourse> {
@@ -277,7 +270,7 @@ fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Opti
                 .iter()
                 .map(|&q| dist(q, crossing))
                 .fold(0.0, f32::max);
-            if length < MIN_LENGTH * nominal
+            if length < LOOP_MIN_WIDTHS * nominal
                 || reach < MIN_REACH * nominal
                 || roundness(&points) < MIN_ROUNDNESS
                 || best.as_ref().is_some_and(|(l, _)| *l >= length)
@@ -386,16 +379,6 @@ fn roundness(points: &[[f32; 2]]) -> f32 {
     2.0 * std::f32::consts::PI * twice_area.abs() / (perimeter * perimeter).max(f32::EPSILON)
 }
 
-/// Arc length along `line` at each of its points.
-fn arc_lengths(line: &[[f32; 2]]) -> Vec<f32> {
-    std::iter::once(0.0)
-        .chain(line.windows(2).scan(0.0, |s, w| {
-            *s += dist(w[0], w[1]);
-            Some(*s)
-        }))
-        .collect()
-}
-
 /// Share of the points of `line` within `tolerance` of a point of `other`.
 fn share_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> f32 {
     points_near(line, other, tolerance) as f32 / line.len().max(1) as f32
@@ -404,7 +387,8 @@ fn share_near(line: &[[f32; 2]], other: &[[f32; 2]], tolerance: f32) -> f32 {
 /// `cable` run round `course`: its polyline to the later of where the loop leaves and
 /// comes back (the way into the loop continues the cable ahead), round the loop, and
 /// on from the earlier, crossing itself between them; fitted and refined again with
-/// its ends held. `None` when the fit fails.
+/// its ends held (and the denser knots of a cable that crosses itself,
+/// [`fit_refined`]). `None` when the fit fails.
 fn splice(cable: &Cable, course: &LoopCourse, ground: Ground<'_>) -> Option<Cable> {
     let p = ground.params;
     let line = &cable.polyline;
@@ -430,16 +414,12 @@ fn splice(cable: &Cable, course: &LoopCourse, ground: Ground<'_>) -> Option<Cabl
         weights[k] = p.end_weight;
     }
     let anchors = ends.map(|e| Some((e, p.end_weight)));
-    let tighter = Params {
-        knot_spacing_px: LOOP_KNOT_SHARE * p.knot_spacing_px,
-        ..p.clone()
-    };
     let Fitted {
         spline,
         polyline,
         width,
         ridge_share,
-    } = fit_refined(&points, &weights, anchors, ground.lab, &tighter)?;
+    } = fit_refined(&points, &weights, anchors, ground.lab, p)?;
     Some(Cable {
         ends: [polyline[0], polyline[polyline.len() - 1]],
         length_px: polyline_length(&polyline),
