@@ -82,9 +82,9 @@ const USUAL: Strictness = Strictness {
 /// The second search, where the first finds none: a pale or thin loop that the field
 /// reads fainter still (a white loop on orange card, 0.2-0.3 over its superpixels; a
 /// course with one such gap), taken only where its colour is its cable's more closely.
-/// On the stress scenes (seeds 11-21) the faint loops taken lay 1-8 from their cables'
-/// colour, the false courses this let in across a same-colour twin or between another
-/// cable's loop and the cable 21-27.
+/// On the stress scenes (seeds 11-21) the faint loops taken lay ΔE 1-8 from their
+/// cables' colour; the false courses a bar of 30 let in (across a same-colour twin,
+/// between another cable's loop and the cable) ΔE 21-27.
 const FAINT: Strictness = Strictness {
     field_share: 0.4,
     max_colour_de: 15.0,
