@@ -259,7 +259,7 @@ pub struct EvalArgs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
+    use clap::{CommandFactory, FromArgMatches, Parser};
 
     #[derive(Parser)]
     struct Wrapper {
@@ -267,11 +267,18 @@ mod tests {
         serve: ServeArgs,
     }
 
+    /// `args` parsed as `ariadne serve` would, but blind to the environment (the
+    /// `ARIADNE_*` and `ORT_DYLIB_PATH` variables of whoever runs the tests).
+    fn parse(args: &[&str]) -> Result<Wrapper, clap::Error> {
+        let command = Wrapper::command().mut_args(|arg| arg.env(None::<&str>));
+        Wrapper::from_arg_matches(&command.try_get_matches_from(args)?)
+    }
+
     #[test]
     fn flag_defaults_are_the_config_defaults() {
-        let parsed: ServeConfig = Wrapper::parse_from(["ariadne"]).serve.into();
+        let parsed: ServeConfig = parse(&["ariadne"]).unwrap().serve.into();
         assert_eq!(parsed, ServeConfig::default());
-        let flags = Wrapper::parse_from([
+        let flags = parse(&[
             "ariadne",
             "--workers",
             "3",
@@ -279,11 +286,12 @@ mod tests {
             "json",
             "--model-kind",
             "yolo",
-        ]);
+        ])
+        .unwrap();
         let config: ServeConfig = flags.serve.into();
         assert_eq!(config.workers, Some(3));
         assert_eq!(config.log_format, LogFormat::Json);
         assert_eq!(config.detector.model_kind, ModelKind::Yolo);
-        assert!(Wrapper::try_parse_from(["ariadne", "--log-format", "xml"]).is_err());
+        assert!(parse(&["ariadne", "--log-format", "xml"]).is_err());
     }
 }
