@@ -121,9 +121,7 @@ pub(super) fn close_loops(
         if dropped[i] {
             continue;
         }
-        let Some(course) =
-            find_loop(&cables[i], ground, &USUAL).or_else(|| find_loop(&cables[i], ground, &FAINT))
-        else {
+        let Some(course) = find_loop(&cables[i], ground) else {
             continue;
         };
         // The loop's own: cables along it with little of themselves elsewhere. The rest
@@ -190,12 +188,13 @@ struct LoopCourse {
 
 /// The loop `cable` was walked across, if the field shows one (module docs): the
 /// longest of the cheapest courses ([`cheapest`], [`COURSE_DE`]) over superpixels the
-/// field calls cable (`strictness`) and the cable does not cover,
+/// field calls cable and the cable does not cover,
 /// between two that touch the cable at most [`MAX_SPAN`] apart along it and
 /// [`END_MARGIN`] from its ends, at least [`LOOP_MIN_WIDTHS`] long, reaching [`MIN_REACH`]
 /// from the crossing, at least [`MIN_ROUNDNESS`] round, all in view, with no given
-/// end on it and of the cable's colour (`strictness`).
-fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Option<LoopCourse> {
+/// end on it and of the cable's colour: searched as sure as [`USUAL`], then, where
+/// that finds none, as [`FAINT`].
+fn find_loop(cable: &Cable, ground: Ground<'_>) -> Option<LoopCourse> {
     let Ground {
         graph, sp, field, ..
     } = ground;
@@ -210,10 +209,6 @@ fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Opti
         0.5 * cable.width_px.max(nominal) + 0.5 * sp.step,
         ground,
     );
-    // Fainter field than an orphan's: colour keeps the course on its cable.
-    let free = |v: u32| {
-        field[v as usize].cable >= strictness.field_share * p.field_orphan_level && !on[v as usize]
-    };
     let arc = arc_lengths(line);
     let centroid = |v: u32| graph.vertices[v as usize].centroid;
     let along = |q: [f32; 2]| {
@@ -222,14 +217,6 @@ fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Opti
             .unwrap_or(0);
         arc[nearest]
     };
-    // Free superpixels next to the cable, with where along it they touch it.
-    let total = arc[arc.len() - 1];
-    let margin = END_MARGIN * nominal;
-    let touching: Vec<(u32, f32)> = (0..graph.len() as u32)
-        .filter(|&v| free(v) && graph.neighbours(v).iter().any(|&u| on[u as usize]))
-        .map(|v| (v, along(centroid(v))))
-        .filter(|&(_, s)| s >= margin && s <= total - margin)
-        .collect();
     let [w, h] = [sp.width as f32, sp.height as f32];
     let in_view = |[x, y]: [f32; 2]| x.min(y).min(w - x).min(h - y) > sp.step;
     let no_end = |q: [f32; 2]| {
@@ -244,55 +231,74 @@ fn find_loop(cable: &Cable, ground: Ground<'_>, strictness: &Strictness) -> Opti
     let colour = median_lab(graph, &under)?;
     let unlike = |v: u32| dist3(graph.vertices[v as usize].mean_lab, colour) / COURSE_DE;
     let step_cost = |v: u32| 1.0 + unlike(v).powi(2);
-    let of_its_colour = |course: &[u32]| {
-        median_lab(graph, course).is_some_and(|c| dist3(c, colour) <= strictness.max_colour_de)
-    };
     let mut cost = vec![f32::INFINITY; graph.len()];
     let mut parent = vec![0; graph.len()];
-    let mut best: Option<(f32, LoopCourse)> = None;
-    for &(a, sa) in &touching {
-        let order = cheapest(graph, a, &free, &step_cost, &mut cost, &mut parent);
-        for &(b, sb) in &touching {
-            if b == a || cost[b as usize].is_infinite() || (sa - sb).abs() > MAX_SPAN * nominal {
-                continue;
+    let total = arc[arc.len() - 1];
+    let margin = END_MARGIN * nominal;
+    for strictness in [&USUAL, &FAINT] {
+        // Fainter field than an orphan's: colour keeps the course on its cable.
+        let free = |v: u32| {
+            field[v as usize].cable >= strictness.field_share * p.field_orphan_level
+                && !on[v as usize]
+        };
+        // Free superpixels next to the cable, with where along it they touch it.
+        let touching: Vec<(u32, f32)> = (0..graph.len() as u32)
+            .filter(|&v| free(v) && graph.neighbours(v).iter().any(|&u| on[u as usize]))
+            .map(|v| (v, along(centroid(v))))
+            .filter(|&(_, s)| s >= margin && s <= total - margin)
+            .collect();
+        let of_its_colour = |course: &[u32]| {
+            median_lab(graph, course).is_some_and(|c| dist3(c, colour) <= strictness.max_colour_de)
+        };
+        let mut best: Option<(f32, LoopCourse)> = None;
+        for &(a, sa) in &touching {
+            let order = cheapest(graph, a, &free, &step_cost, &mut cost, &mut parent);
+            for &(b, sb) in &touching {
+                if b == a || cost[b as usize].is_infinite() || (sa - sb).abs() > MAX_SPAN * nominal
+                {
+                    continue;
+                }
+                let mut course = vec![b];
+                while let Some(&v) = course.last().filter(|&&v| v != a) {
+                    course.push(parent[v as usize]);
+                }
+                course.reverse();
+                let points: Vec<[f32; 2]> = course.iter().map(|&v| centroid(v)).collect();
+                let length = polyline_length(&points);
+                let crossing = line[arc
+                    .partition_point(|&s| s < 0.5 * (sa + sb))
+                    .min(line.len() - 1)];
+                let reach = points
+                    .iter()
+                    .map(|&q| dist(q, crossing))
+                    .fold(0.0, f32::max);
+                if length < LOOP_MIN_WIDTHS * nominal
+                    || reach < MIN_REACH * nominal
+                    || roundness(&points) < MIN_ROUNDNESS
+                    || best.as_ref().is_some_and(|(l, _)| *l >= length)
+                    || !points.iter().all(|&q| in_view(q) && no_end(q))
+                    || !of_its_colour(&course)
+                {
+                    continue;
+                }
+                best = Some((
+                    length,
+                    LoopCourse {
+                        points,
+                        leaves: sa,
+                        returns: sb,
+                    },
+                ));
             }
-            let mut course = vec![b];
-            while let Some(&v) = course.last().filter(|&&v| v != a) {
-                course.push(parent[v as usize]);
+            for &v in &order {
+                cost[v as usize] = f32::INFINITY;
             }
-            course.reverse();
-            let points: Vec<[f32; 2]> = course.iter().map(|&v| centroid(v)).collect();
-            let length = polyline_length(&points);
-            let crossing = line[arc
-                .partition_point(|&s| s < 0.5 * (sa + sb))
-                .min(line.len() - 1)];
-            let reach = points
-                .iter()
-                .map(|&q| dist(q, crossing))
-                .fold(0.0, f32::max);
-            if length < LOOP_MIN_WIDTHS * nominal
-                || reach < MIN_REACH * nominal
-                || roundness(&points) < MIN_ROUNDNESS
-                || best.as_ref().is_some_and(|(l, _)| *l >= length)
-                || !points.iter().all(|&q| in_view(q) && no_end(q))
-                || !of_its_colour(&course)
-            {
-                continue;
-            }
-            best = Some((
-                length,
-                LoopCourse {
-                    points,
-                    leaves: sa,
-                    returns: sb,
-                },
-            ));
         }
-        for &v in &order {
-            cost[v as usize] = f32::INFINITY;
+        if let Some((_, course)) = best {
+            return Some(course);
         }
     }
-    best.map(|(_, course)| course)
+    None
 }
 
 /// The superpixel under the point `q`, if it lies in the image.
