@@ -192,7 +192,7 @@ def match(found, truth, radius=15.0):
     return tp
 
 
-def evaluate(model, photos):
+def evaluate(model, photos, device="cpu"):
     """Terminal recall / precision (15 px, photo px); the field's cable-cell IoU
     (prediction ≥ 0.5 against target ≥ 0.5 on the grid); centreline coverage (share of
     annotated centreline points whose cell the field calls cable); and the share of
@@ -202,7 +202,8 @@ def evaluate(model, photos):
     inter = union = covered = points = stray = positive = 0
     with torch.no_grad():
         for p in photos:
-            out = model(torch.from_numpy(to_tensor(p.rgb))[None])[0].numpy()
+            image = torch.from_numpy(to_tensor(p.rgb))[None].to(device)
+            out = model(image)[0].cpu().numpy()
             truth = [(x / scenes.INPUT_SCALE, y / scenes.INPUT_SCALE) for x, y in p.ends]
             found = decode(out)
             tp += match(found, truth)
@@ -275,6 +276,8 @@ def main():
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="PyTorch threads for training")
     ap.add_argument("--workers", type=int, default=1, help="processes making scenes")
+    ap.add_argument("--device", default="cpu",
+                    help="where the network trains: cpu (the recipe's figures) or cuda")
     ap.add_argument("--out", default="models/cable_field.onnx")
     ap.add_argument("--scene-hash", type=int, default=0, metavar="N",
                     help="print the MD5 of the first N training batches and stop")
@@ -311,6 +314,7 @@ def main():
         model = FieldNet(args.width)
         param_groups, peaks = [{"params": list(model.parameters())}], [args.lr]
     n_params = sum(p.numel() for p in model.parameters())
+    model.to(args.device)
     opt = torch.optim.AdamW(param_groups, lr=args.lr, weight_decay=1e-4)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=peaks, total_steps=args.steps)
     history, start, window = [], time.time(), []
@@ -318,6 +322,7 @@ def main():
         SceneStream(train, args), batch_size=None, num_workers=args.workers))
     for step in range(1, args.steps + 1):
         x, t = next(stream)
+        x, t = x.to(args.device), [a.to(args.device) for a in t]
         loss = losses(model(x), t, args.end_weight)
         opt.zero_grad()
         loss.backward()
@@ -328,18 +333,19 @@ def main():
             entry = {"step": step, "loss": float(np.mean(window)),
                      "seconds": round(time.time() - start)}
             if held:
-                entry["held_out"] = evaluate(model, held)
+                entry["held_out"] = evaluate(model, held, args.device)
             history.append(entry)
             window = []
             print(json.dumps(entry), flush=True)
 
     model.eval()
     report = {"args": vars(args), "parameters": n_params, "groups": groups,
-              "history": history, "train": evaluate(model, train),
-              "held_out": evaluate(model, held) if held else None,
+              "history": history, "train": evaluate(model, train, args.device),
+              "held_out": evaluate(model, held, args.device) if held else None,
               "train_seconds": round(time.time() - start)}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    model.cpu()
     export_onnx(model, out)
     torch.save(model.state_dict(), out.with_suffix(".pt"))
     out.with_suffix(".train.json").write_text(json.dumps(report, indent=2) + "\n")
