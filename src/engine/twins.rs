@@ -14,11 +14,13 @@
 //! own variation; the best shift is taken when it matches (`twin_max_cost`), the two
 //! cables it implies are each at least [`MIN_TWIN`] nominal widths wide, the gap
 //! between them no wider than [`MAX_GAP`] of a cable, and the valley between them
-//! unlike their cores ([`VALLEY`]). One cable, shaded or glossy, does not repeat
-//! itself at a shift of half its width (its rim would lie on its core), and a flat one
-//! has no valley. A cable whose profiles read as twins in at least `twin_min_share` of
-//! those that read at all is replaced by the two cables, each drawn through the twin
-//! centres read along it.
+//! unlike their cores ([`VALLEY`]): darker than them, nearer the table's colour, or
+//! flanked by rims darker than them ([`RIM_DIP`]). One cable, shaded or glossy, does
+//! not repeat itself at a shift of half its width (its rim would lie on its core), a
+//! flat one has no valley, and a glossy one's highlight is lighter than its cores,
+//! unlike the table and flanked by its body, no darker than them. A cable whose
+//! profiles read as twins in at least `twin_min_share` of those that read at all is
+//! replaced by the two cables, each drawn through the twin centres read along it.
 
 use image::RgbImage;
 
@@ -59,6 +61,9 @@ const MAX_GAP: f32 = 0.6;
 /// The valley between twins differs from the mean of their cores by at least this
 /// share of the band's variation.
 const VALLEY: f32 = 0.4;
+/// A rim flanking a valley lighter than the cores is darker than them by at least this
+/// share of the valley's least contrast (`VALLEY` times the band's variation).
+const RIM_DIP: f32 = 0.5;
 /// A profile is read every this many pixels along the cable...
 const SPACING_PX: f32 = 4.0;
 /// ... but not within this many pixels of its ends (a terminal, the frame).
@@ -318,9 +323,23 @@ fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Optio
         (band.len() - 1).saturating_sub(w).saturating_add(2),
     );
     let (a, b) = (a.min(b).max(1), a.max(b).min(band.len() - 2));
-    let valley = band[a..=b]
-        .iter()
-        .map(|&s| dist3(s, core))
+    // What counts as valley: a sample darker than the cores (two shaded cables' rims
+    // meeting), nearer the table's colour than theirs (a sliver of table between
+    // them), or lighter but flanked on both sides, between the cores, by a rim darker
+    // than them (a blurred sliver); not a glossy cable's highlight, which its body
+    // flanks at the cores' lightness.
+    let (first, last) = (w / 2, band.len() - 1 - w / 2);
+    let dip = RIM_DIP * VALLEY * variation;
+    let rim = |r: &[[f32; 3]]| r.iter().any(|s| s[0] < core[0] - dip);
+    let nearer_table = |s: [f32; 3]| dist3(s, left).min(dist3(s, right)) < dist3(s, core);
+    let counts = |i: usize| {
+        band[i][0] < core[0]
+            || nearer_table(band[i])
+            || (first < i && i < last && rim(&band[first..i]) && rim(&band[i + 1..=last]))
+    };
+    let valley = (a..=b)
+        .filter(|&i| counts(i))
+        .map(|i| dist3(band[i], core))
         .fold(0.0f32, f32::max);
     if valley < VALLEY * variation {
         return Some(None);
@@ -461,6 +480,52 @@ mod tests {
             let pair = blurred(&profile(&cables, TABLE, reach), 1.0);
             let t = read_twins(&pair, 7.8, 0.8).unwrap().expect("twins");
             assert!((t.width - width).abs() <= 0.75, "{width} {gap} {t:?}");
+        }
+    }
+
+    /// A grey profile of lightness `band` centred on the cable, on a table of
+    /// lightness `table`, as long as `read_twins` reads at the nominal width 7.8 px.
+    fn grey(band: &[f32], table: f32) -> Vec<[f32; 3]> {
+        let n = 2 * (REACH * 7.8 / STEP).round() as usize + 1;
+        let before = (n - band.len()) / 2;
+        (0..n)
+            .map(|i| {
+                let l = i
+                    .checked_sub(before)
+                    .and_then(|j| band.get(j))
+                    .unwrap_or(&table);
+                [*l, 0.0, 0.0]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_gap_between_dark_twins_is_a_valley_and_a_glossy_cable_s_highlight_is_not() {
+        // Read across two stress scenes (`scripts/stress.py --seed 18`): a glossy black
+        // power cable about 20 px wide (mixed/00005), its highlight a soft band down
+        // the middle, and two black cables side by side (pairs/00006), the 1 px gap
+        // between them blurred to about half the table's lightness. Their middles are
+        // alike; the rims that flank the gap, darker than the cables' cores, are not.
+        let glossy = grey(
+            &[
+                66., 54., 42., 31., 23., 18., 15., 15., 14., 14., 14., 14., 15., 17., 19., 21.,
+                24., 25., 26., 27., 25., 24., 22., 19., 17., 16., 15., 14., 14., 14., 14., 14.,
+                17., 21., 28., 38., 50., 63.,
+            ],
+            95.0,
+        );
+        let pair = grey(
+            &[
+                60., 46., 34., 24., 18., 16., 15., 17., 19., 21., 24., 25., 26., 25., 23., 21.,
+                20., 21., 24., 32., 40., 50., 59., 59., 58., 47., 36., 27., 19., 17., 15., 16.,
+                18., 21., 23., 25., 26., 25., 24., 22., 20., 21., 22., 29., 38., 50., 63.,
+            ],
+            93.0,
+        );
+        for cost in [Params::default().twin_max_cost, 1.0] {
+            assert_eq!(read_twins(&glossy, 7.8, cost), Some(None), "{cost}");
+            let t = read_twins(&pair, 7.8, cost).unwrap().expect("twins");
+            assert!((t.offsets[1] - t.offsets[0] - 11.0).abs() <= 1.5, "{t:?}");
         }
     }
 
