@@ -2,12 +2,12 @@
 """Found cables that lie off every annotated cable, and what they cost the weighted IoU.
 
 Every photo of the development split is segmented from the photo alone (the bundled
-network; `clutter` for `hard/`, as `ariadne eval` does). Each found cable is drawn as the
-masks are (a 7 px stroke along its polyline), and the share of that stroke on the
-annotated union mask is read. A cable with almost none of it there (under `--share`) is
-either a false cable or a cable the annotation leaves out: look at the listed ones.
-The weighted IoU is then read with all the found cables and without those, on these
-drawn masks (not the service's own, whose pixel-centre convention reads a little higher).
+network; `clutter` for `hard/`, as `ariadne eval` does), with the service's label mask
+(`--mask-kind labels`: each cable's own mask, as `ariadne eval` draws them), and the
+share of each cable's mask on the annotated union mask is read. A cable with almost
+none of it there (under `--share`) is either a false cable or a cable the annotation
+leaves out: look at the listed ones. The weighted IoU is then read with all the found
+cables and without those.
 
     training/.venv/bin/python scripts/unannotated.py [--binary target/release/ariadne]
 """
@@ -20,16 +20,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw
-
-STROKE_PX = 7
-
-
-def stroke(polyline, size):
-    """A `size` mask of `polyline` drawn `STROKE_PX` wide."""
-    mask = Image.new("L", size, 0)
-    ImageDraw.Draw(mask).line([tuple(p) for p in polyline], fill=255, width=STROKE_PX)
-    return np.asarray(mask) > 127
+from PIL import Image
 
 
 def main():
@@ -44,17 +35,18 @@ def main():
         found = listed = 0
         for jpg in sorted((root / set_name).glob("*.jpg")):
             with tempfile.TemporaryDirectory() as tmp:
-                out = Path(tmp) / "r.json"
+                out, labels_png = Path(tmp) / "r.json", Path(tmp) / "labels.png"
                 subprocess.run([args.binary, "segment", str(jpg), "--preset", preset,
-                                "--json", str(out)], check=True, capture_output=True)
+                                "--json", str(out), "--mask", str(labels_png),
+                                "--mask-kind", "labels"], check=True, capture_output=True)
                 result = json.loads(out.read_text())
-            size = (result["width"], result["height"])
+                labels = np.asarray(Image.open(labels_png))
             truth = np.asarray(Image.open(jpg.with_name(f"{jpg.stem}_mask_all.png"))
                                .convert("L")) > 127
             every = np.zeros_like(truth)
             kept = np.zeros_like(truth)
             for cable in result["cables"]:
-                mask = stroke(cable["polyline"], size)
+                mask = labels == cable["id"] + 1
                 share = (mask & truth).sum() / max(mask.sum(), 1)
                 every |= mask
                 found += 1
@@ -71,8 +63,8 @@ def main():
             weighted_all += count * (every & truth).sum() / max((every | truth).sum(), 1)
             weighted_kept += count * (kept & truth).sum() / max((kept | truth).sum(), 1)
             cables_total += count
-        print(f"{set_name}: {listed} of {found} found cables listed; weighted IoU on drawn "
-              f"masks {weighted_all / cables_total:.4f} with them, "
+        print(f"{set_name}: {listed} of {found} found cables listed; weighted IoU "
+              f"{weighted_all / cables_total:.4f} with them, "
               f"{weighted_kept / cables_total:.4f} without")
 
 
