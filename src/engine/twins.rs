@@ -331,10 +331,9 @@ fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Optio
     let (first, last) = (w / 2, band.len() - 1 - w / 2);
     let dip = RIM_DIP * VALLEY * variation;
     let rim = |r: &[[f32; 3]]| r.iter().any(|s| s[0] < core[0] - dip);
-    let nearer_table = |s: [f32; 3]| dist3(s, left).min(dist3(s, right)) < dist3(s, core);
     let counts = |i: usize| {
         band[i][0] < core[0]
-            || nearer_table(band[i])
+            || fg[lo + i] < dist3(band[i], core)
             || (first < i && i < last && rim(&band[first..i]) && rim(&band[i + 1..=last]))
     };
     let valley = (a..=b)
