@@ -282,11 +282,15 @@ pub enum Case {
     /// loop's centre: a chord of it, so the loop leaves and comes back to the orange
     /// cable too, 80 px apart.
     LoopCrossedByAnother,
+    /// Two grey cables of one colour laid a sliver of black card apart (4 px, about
+    /// half a cable): one band to the network and the walks, whose profile closes
+    /// over the sliver only when read with a gap as wide as a cable.
+    TwinsApart,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 14] = [
+    pub const ALL: [Case; 15] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -301,13 +305,14 @@ impl Case {
         Case::Mixed,
         Case::PaleNoEndInView,
         Case::LoopCrossedByAnother,
+        Case::TwinsApart,
     ];
 
     /// Width of the case's `k`-th cable, pixels.
     fn cable_width(self, k: usize) -> f32 {
         match self {
             Case::SideBySideThin => 8.0,
-            Case::Twins | Case::TwinsNoEndInView => 9.0,
+            Case::Twins | Case::TwinsNoEndInView | Case::TwinsApart => 9.0,
             Case::Mixed if k == 0 => 16.0,
             Case::Mixed => 5.0,
             _ => 11.0,
@@ -394,6 +399,14 @@ pub fn case(case: Case) -> Scene {
             (
                 [226, 224, 218],
                 vec![(a, [40, 90, 200]), (b, [40, 90, 200])],
+            )
+        }
+        Case::TwinsApart => {
+            let a = line(&arc(130.0, 110.0, 520.0, 360.0, -0.2), 600);
+            let b = alongside(&a, width + 4.0);
+            (
+                [26, 26, 28],
+                vec![(a, [150, 150, 152]), (b, [150, 150, 152])],
             )
         }
         Case::TwinsNoEndInView => {
