@@ -461,7 +461,7 @@ impl Default for Params {
             loops: true,
             twins: true,
             twin_min_share: 0.6,
-            twin_max_cost: 0.8,
+            twin_max_cost: 0.95,
             end_weight: 25.0,
             far_end_trim: 0.5,
             border_exit_steps: 3.0,
