@@ -294,34 +294,52 @@ fn read_twins(profile: &[[f32; 3]], nominal: f32, max_cost: f32) -> Option<Optio
         last
     };
     // The band with short holes closed; where it is one cable, with a gap as wide as
-    // a cable closed (kept one cable when that band runs off the profile).
+    // a cable closed (kept one cable when that band runs off the profile). Where the
+    // wider hole closes nothing more, the band read already is judged again by the
+    // wider gap alone.
     let mut reading = None;
+    let mut last: Option<([usize; 2], Option<Candidate>)> = None;
     for (hole, max_gap) in [(HOLE, MAX_GAP), (WIDE_HOLE, WIDE_MAX_GAP)] {
-        let lo = grow(samples(hole), &mut (0..start).rev());
-        let hi = grow(samples(hole), &mut (start + 1..n));
-        if lo < end || hi + end >= n {
+        let band = [
+            grow(samples(hole), &mut (0..start).rev()),
+            grow(samples(hole), &mut (start + 1..n)),
+        ];
+        if band[0] < end || band[1] + end >= n {
             return reading;
         }
-        let twins = twins_in(profile, &fg, [lo, hi], nominal, max_cost, max_gap);
-        if twins.is_some() {
-            return Some(twins);
+        let candidate = match last {
+            Some((read, candidate)) if read == band => candidate,
+            _ => twins_in(profile, &fg, band, nominal, max_cost),
+        };
+        last = Some((band, candidate));
+        if let Some(c) = candidate.filter(|c| c.gap <= max_gap * c.width) {
+            return Some(Some(c.twins));
         }
         reading = Some(None);
     }
     reading
 }
 
+/// Twins read in a band, before the gap between them is judged.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    twins: Twins,
+    /// The gap between them and the width of each, as the band's span and the shift
+    /// that matches it read them, pixels.
+    gap: f32,
+    width: f32,
+}
+
 /// Twins in the band `lo..=hi` of `profile` (`fg`: each sample's contrast to the
-/// profile's ends), no more than `max_gap` of a twin's width apart, or `None`: one
-/// cable ([`read_twins`]).
+/// profile's ends), whatever the gap between them, or `None`: one cable
+/// ([`read_twins`]).
 fn twins_in(
     profile: &[[f32; 3]],
     fg: &[f32],
     [lo, hi]: [usize; 2],
     nominal: f32,
     max_cost: f32,
-    max_gap: f32,
-) -> Option<Twins> {
+) -> Option<Candidate> {
     let centre = profile.len() / 2;
     let samples = |widths: f32| samples(widths, nominal);
     let band = &profile[lo..=hi];
@@ -349,7 +367,7 @@ fn twins_in(
     let separation = shift as f32 * STEP;
     let width = band.len() as f32 * STEP - separation;
     let gap = separation - width;
-    if cost > max_cost || width < MIN_TWIN * nominal || gap > max_gap * width {
+    if cost > max_cost || width < MIN_TWIN * nominal {
         return None;
     }
     let w = (width / STEP).round() as usize;
@@ -380,13 +398,14 @@ fn twins_in(
         return None;
     }
     let offset = |i: f32| (lo as f32 + i - centre as f32) * STEP;
-    Some(Twins {
+    let twins = Twins {
         offsets: [
             offset(w as f32 / 2.0),
             offset((band.len() - 1) as f32 - w as f32 / 2.0),
         ],
         width: (outer_span(fg, lo, hi, w / 2) - separation).min(separation),
-    })
+    };
+    Some(Candidate { twins, gap, width })
 }
 
 /// Profile samples in `widths` nominal widths of `nominal` pixels.
