@@ -286,11 +286,15 @@ pub enum Case {
     /// half a cable): one band to the network and the walks, whose profile closes
     /// over the sliver only when read with a gap as wide as a cable.
     TwinsApart,
+    /// A cable that runs in at a shallow angle (about 17°) to end beside another, its
+    /// terminal 15 px off the other's centreline: the walks along the other cable pass
+    /// within reach of that end, heading nearly the way the field runs there.
+    TerminalBesideCable,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 15] = [
+    pub const ALL: [Case; 16] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -306,6 +310,7 @@ impl Case {
         Case::PaleNoEndInView,
         Case::LoopCrossedByAnother,
         Case::TwinsApart,
+        Case::TerminalBesideCable,
     ];
 
     /// Width of the case's `k`-th cable, pixels.
@@ -472,6 +477,21 @@ pub fn case(case: Case) -> Scene {
                 (
                     line(&arc(340.0, 479.0, 320.0, 271.0, 0.08), 300),
                     [40, 40, 44],
+                ),
+            ],
+        ),
+        Case::TerminalBesideCable => (
+            // The first cable runs straight through (330, 211); the second ends at
+            // (330, 226), its metal tip pointing along the first, 4 px short of its rim.
+            [226, 224, 218],
+            vec![
+                (
+                    line(&arc(40.0, 180.0, 600.0, 240.0, 0.0), 600),
+                    [30, 150, 50],
+                ),
+                (
+                    line(&arc(90.0, 330.0, 330.0, 226.0, 0.05), 300),
+                    [120, 70, 40],
                 ),
             ],
         ),

@@ -272,6 +272,9 @@ fn exact_field(s: &ariadne_dlo::synth::Scene) -> engine::CableField {
 /// In `TerminalAgainstCable` the walks along the first cable pass within reach of the
 /// second cable's terminal, across the field's direction there, and go on
 /// (`field_close_min_alignment`; with it at 0 they close on it and a cable is lost).
+/// In `TerminalBesideCable` they pass, heading nearly the field's way, the terminal of
+/// a cable that ends 15 px beside theirs, and go on because their cable runs on past
+/// it (without that, a cable 49 px off the truth is found).
 /// In `Curl` the walk crosses the place where the cable crosses itself at a shallow
 /// angle, leaving the loop out; the loop is taken in from the field (`loops`; with it
 /// off this test fails on `Curl`). `CrossingLoop`, left out here until 2026-11-23, is
@@ -471,7 +474,9 @@ fn with_field_and(
 /// their ends, as above, all three are found, and from a photo alone the pipeline's
 /// two passes find them, `tests/e2e.rs`). Nor `LoopCrossedByAnother`: with no end,
 /// the orange cable is found and the blue one with its loop is not (from their ends
-/// both are, the tests above).
+/// both are, the tests above). Nor `TerminalBesideCable`: with no end, one of its two
+/// cables is found, with or without the walks passing the terminal beside their cable
+/// (`Walker::runs_on_past`; from their ends both are, the tests above).
 #[test]
 fn cables_whose_ends_were_missed_are_found_from_the_field() {
     use ariadne_dlo::synth::Case;
@@ -481,6 +486,7 @@ fn cables_whose_ends_were_missed_are_found_from_the_field() {
         Case::TerminalAgainstCable,
         Case::Mixed,
         Case::LoopCrossedByAnother,
+        Case::TerminalBesideCable,
     ];
     for case in Case::ALL.into_iter().filter(|c| !left_out.contains(c)) {
         let s = ariadne_dlo::synth::case(case);

@@ -45,7 +45,10 @@
 //! terminal of a cable laid alongside goes on; with a field, only when the walk's
 //! heading agrees with the field's direction at that seed by at least
 //! `field_close_min_alignment`, so a walk passing the tip of another cable that ends
-//! against its side goes on), on leaving the frame, when the best
+//! against its side goes on, and not where the seed lies more than a cable width beside
+//! the walk's line while the field shows the walk's cable running on past it, so a
+//! walk passing a terminal that lies beside its cable goes on), on leaving the frame,
+//! when the best
 //! candidate's colour no longer matches the model (it left the cable) or at the
 //! iteration cap. Each walk records the evidence pairing needs: mean colour agreement,
 //! smoothness, and how much its vertices stand out from their sides (a cable is a thin
@@ -330,7 +333,7 @@ impl<'a> Walker<'a> {
         let (mut log_visual, mut log_curve, mut steps) = (0.0f32, 0.0f32, 0u32);
         let mut contrast_sum = self.contrast(first, heading(&points, p.heading_span_px));
         let mut cable_sum = self.vertex_field(first).map_or(1.0, |f| f.cable);
-        let mut end = self.classify(s, &points, length);
+        let mut end = self.classify(s, &points, &vertices, length);
         let mut recoloured = false;
 
         while end.is_none() && (steps as usize) < p.max_steps as usize {
@@ -389,7 +392,7 @@ impl<'a> Walker<'a> {
             }
             contrast_sum += contrast;
             cable_sum += cable;
-            end = self.classify(s, &points, length);
+            end = self.classify(s, &points, &vertices, length);
         }
         let n = steps.max(1) as f32;
         let end = end.unwrap_or(WalkEnd::Lost);
@@ -447,34 +450,66 @@ impl<'a> Walker<'a> {
     }
 
     /// Whether the cable a walk over `vertices` opens along runs on behind its seed:
-    /// over most of the samples one to two superpixel steps back from `seed` against
-    /// the walk's opening direction `u` ([`Self::opening_direction`]), the field calls
-    /// cable (`field_level`), runs along that direction (`THROUGH_MIN_ALIGNMENT`) and
-    /// the photo has the colour of the walk's first superpixels (within
-    /// `THROUGH_MAX_LAB` ΔE). An end's own cable stops at the end: behind it lie its
-    /// metal tip and the background. A cable that passes the end (one the end's tip is
-    /// pushed against) runs on.
+    /// [`Self::runs_on`] back from `seed` against the walk's opening direction `u`
+    /// ([`Self::opening_direction`]), in the colour of the walk's first superpixels.
+    /// An end's own cable stops at the end: behind it lie its metal tip and the
+    /// background. A cable that passes the end (one the end's tip is pushed against)
+    /// runs on.
     fn runs_on_behind(&self, seed: [f32; 2], u: [f32; 2], vertices: &[u32]) -> bool {
+        let first = &vertices[1..vertices.len().min(1 + OPENING_VERTICES)];
+        self.runs_on(seed, u, self.mean_colour(first))
+    }
+
+    /// Whether a walk over `vertices`, its head at `here` heading along `dir`, runs on
+    /// past the end at `end` rather than arriving at it: `end` lies more than a nominal
+    /// cable width beside the walk's line, and [`Self::runs_on`] ahead along that line
+    /// from where `end` lies across it, in the colour of the walk's last superpixels.
+    /// A cable that runs in at a shallow angle to end beside another puts its terminal
+    /// within reach of the walks along that other cable, heading nearly their way; they
+    /// pass it. Where the walk's own cable ends, its metal tip and the background lie
+    /// ahead. An end nearer the line lies on the walk's cable (its terminal, or a false
+    /// end along it) and is arrived at as before.
+    fn runs_on_past(&self, here: [f32; 2], dir: [f32; 2], end: [f32; 2], vertices: &[u32]) -> bool {
+        let v = [end[0] - here[0], end[1] - here[1]];
+        if (v[0] * dir[1] - v[1] * dir[0]).abs() < self.params.nominal_width_px {
+            return false;
+        }
+        let along = v[0] * dir[0] + v[1] * dir[1];
+        let level = [here[0] + dir[0] * along, here[1] + dir[1] * along];
+        let last = &vertices[vertices.len().saturating_sub(OPENING_VERTICES).max(1)..];
+        self.runs_on(level, [-dir[0], -dir[1]], self.mean_colour(last))
+    }
+
+    /// Mean Lab colour of `vertices` (black where there are none).
+    fn mean_colour(&self, vertices: &[u32]) -> [f32; 3] {
+        let mut colour = [0.0f32; 3];
+        for &v in vertices {
+            let lab = self.graph.vertices[v as usize].mean_lab;
+            for (c, l) in colour.iter_mut().zip(lab) {
+                *c += l / vertices.len() as f32;
+            }
+        }
+        colour
+    }
+
+    /// Whether a cable of `colour` runs on behind `point` against the direction `u`:
+    /// over most of the samples one to two superpixel steps back, the field calls cable
+    /// (`field_level`), runs along `u` (`THROUGH_MIN_ALIGNMENT`) and the photo is within
+    /// `THROUGH_MAX_LAB` ΔE of `colour`. Never where another seed lies just behind
+    /// ([`Self::end_behind`]: one terminal marked twice), nor without a field.
+    fn runs_on(&self, point: [f32; 2], u: [f32; 2], colour: [f32; 3]) -> bool {
         let Some(field) = self.field_map else {
             return false;
         };
-        if self.end_behind(seed, u) {
+        if self.end_behind(point, u) {
             return false;
-        }
-        let first = &vertices[1..vertices.len().min(1 + OPENING_VERTICES)];
-        let mut colour = [0.0f32; 3];
-        for &v in first {
-            let lab = self.graph.vertices[v as usize].mean_lab;
-            for (c, l) in colour.iter_mut().zip(lab) {
-                *c += l / first.len() as f32;
-            }
         }
         let (w, h) = (self.lab.width, self.lab.height);
         let samples = ((self.side_px / GAP_SAMPLE_PX).ceil() as usize).max(1);
         let on = (0..=samples)
             .filter(|&k| {
                 let r = self.side_px * (1.0 + k as f32 / samples as f32);
-                let (x, y) = (seed[0] - u[0] * r, seed[1] - u[1] * r);
+                let (x, y) = (point[0] - u[0] * r, point[1] - u[1] * r);
                 if x < 0.0 || y < 0.0 || x > (w - 1) as f32 || y > (h - 1) as f32 {
                     return false;
                 }
@@ -523,8 +558,15 @@ impl<'a> Walker<'a> {
         Some([exit[0] + i, exit[1] + i])
     }
 
-    /// Termination after a step: another seed reached, or the frame left.
-    fn classify(&self, s: usize, points: &[[f32; 2]], length: f32) -> Option<WalkEnd> {
+    /// Termination after a step over `vertices` (at `points`): another seed reached,
+    /// or the frame left.
+    fn classify(
+        &self,
+        s: usize,
+        points: &[[f32; 2]],
+        vertices: &[u32],
+        length: f32,
+    ) -> Option<WalkEnd> {
         let p = self.params;
         let here = *points.last()?;
         let dir = heading(points, p.heading_span_px);
@@ -538,6 +580,7 @@ impl<'a> Walker<'a> {
                 .map(|(t, seed)| (t, dist(seed.point, here)))
                 .filter(|&(_, d)| d <= p.close_radius_px)
                 .filter(|&(t, _)| self.arrives_at(t, here, dir))
+                .filter(|&(t, _)| !self.runs_on_past(here, dir, self.seeds[t].point, vertices))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((t, _)) = hit {
                 return Some(WalkEnd::Seed(t));
