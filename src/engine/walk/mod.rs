@@ -48,11 +48,10 @@
 //! against its side goes on, and not where the seed lies more than a cable width beside
 //! the walk's line while the field shows the walk's cable running on past it, so a
 //! walk passing a terminal that lies beside its cable goes on), on leaving the frame,
-//! when the best
-//! candidate's colour no longer matches the model (it left the cable) or at the
-//! iteration cap. Each walk records the evidence pairing needs: mean colour agreement,
-//! smoothness, and how much its vertices stand out from their sides (a cable is a thin
-//! structure; a walk over plain background is not).
+//! when the best candidate's colour no longer matches the model (it left the cable) or
+//! at the iteration cap. Each walk records the evidence pairing needs: mean colour
+//! agreement, smoothness, and how much its vertices stand out from their sides (a cable
+//! is a thin structure; a walk over plain background is not).
 
 mod step;
 
