@@ -121,9 +121,9 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
         assert_eq!(found.len(), truth.len(), "{case:?}: extra cables");
         // The terminal pressed against the other cable's side is a known miss (README,
         // How the engine uses the field, "The second twin's terminal"): the network
-        // reports no end there. So is the one beside the other cable ("A terminal
-        // beside another cable"): its 11 px cables are segmented again at 0.7 of the
-        // size, where the network sees no end 3 px from the other cable's rim.
+        // reports no end there. So is the one beside the other cable ("Passing a
+        // terminal beside the cable"): its 11 px cables are segmented again at about
+        // 0.7 of the size, where the network sees no end 3 px from the other cable's rim.
         let known_misses = usize::from(matches!(
             case,
             Case::TerminalAgainstCable | Case::TerminalBesideCable
