@@ -290,11 +290,17 @@ pub enum Case {
     /// terminal 15 px off the other's centreline: the walks along the other cable pass
     /// within reach of that end, heading nearly the way the field runs there.
     TerminalBesideCable,
+    /// A cable that turns a full circle and a little more (0.6 rad, 34°) at 60 px
+    /// radius on its way: wider than `Curl`'s, its way in and its way on meet it
+    /// tangentially on either side of its lowest point, so the walk follows the loop's
+    /// lowest arc between them, and where the loop leaves and comes back lie far apart
+    /// along the cable (the stress scenes' loops drawn so).
+    TangentLoop,
 }
 
 impl Case {
     /// Every case.
-    pub const ALL: [Case; 16] = [
+    pub const ALL: [Case; 17] = [
         Case::DarkOnDark,
         Case::SideBySide,
         Case::SideBySideThin,
@@ -311,6 +317,7 @@ impl Case {
         Case::LoopCrossedByAnother,
         Case::TwinsApart,
         Case::TerminalBesideCable,
+        Case::TangentLoop,
     ];
 
     /// Width of the case's `k`-th cable, pixels.
@@ -445,6 +452,16 @@ pub fn case(case: Case) -> Scene {
             ([230, 228, 220], vec![(line(&f, 900), [220, 150, 20])])
         }
         Case::Curl => ([228, 226, 220], vec![(curl(), [40, 90, 200])]),
+        Case::TangentLoop => {
+            // 220 px from (80, 200) heading down and right (0.5 rad), a turn of 2π + 0.6
+            // rad towards the top at 60 px radius, 220 px on, heading up and right.
+            let (radius, heading, turn) = (60.0f32, 0.5, std::f32::consts::TAU + 0.6);
+            let looped = (turn * radius).round() as usize;
+            let mut path = turning([80.0, 200.0], heading, 0.0, 220);
+            path.extend(turning(path[path.len() - 1], heading, -turn, looped).split_off(1));
+            path.extend(turning(path[path.len() - 1], heading - turn, 0.0, 220).split_off(1));
+            ([226, 224, 218], vec![(path, [200, 40, 40])])
+        }
         Case::LoopCrossedByAnother => (
             [228, 226, 220],
             vec![

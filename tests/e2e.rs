@@ -61,7 +61,9 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
 /// a dark cable on a dark background, two same-colour cables side by side, a cable with
 /// no end in view, a self-crossing loop. Each true cable must be found (per-cable IoU
 /// ≥ 0.5 of the 7 px strokes), and nothing else; the cable that curls over itself at a
-/// shallow angle (`Curl`) must be found with its loop. In `LoopCrossedByAnother` both
+/// shallow angle (`Curl`) must be found with its loop, and so must the wide loop met
+/// tangentially (`TangentLoop`: before the wide search of `loops`, its loop was found
+/// as a cable of its own, 0.83 of the centreline covered). In `LoopCrossedByAnother` both
 /// cables are found, but the blue one without its loop (0.75 of the centrelines
 /// covered): its cables read 12 px wide, so the photo is segmented again at 0.65,
 /// where the loop (29 px in radius there) is not taken in (README, How the engine uses
@@ -133,11 +135,12 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
             "{case:?}: {ends} of {} terminals among the ends",
             terminals.len()
         );
-        if case == Case::Curl {
-            // Matched by IoU even with its loop left out (0.55-0.58 of it covered then).
+        if matches!(case, Case::Curl | Case::TangentLoop) {
+            // Matched by IoU even with its loop left out (`Curl`: 0.55-0.58 of it
+            // covered then).
             assert!(
                 covered >= 0.95,
-                "Curl: the loop was left out ({covered:.3})"
+                "{case:?}: the loop was left out ({covered:.3})"
             );
         }
     }
