@@ -53,10 +53,11 @@ const CLOSE: Span = Span {
 };
 
 /// The second, for the cables with no loop that closes: a wide loop that meets its
-/// cable tangentially, whose arc nearest the cable the walk follows, leaves and comes back farther
-/// apart along it. It must be rounder: within such a span a course also runs out along
-/// a cable of the same colour beside this one (a twin, a neighbour) and back, a lens
-/// between two cables, and a cable that only touches another's loop could claim it.
+/// cable tangentially, whose arc nearest the cable the walk follows, leaves and comes
+/// back farther apart along it. It must be rounder: within such a span a course also
+/// runs out along a cable of the same colour beside this one (a twin, a neighbour) and
+/// back, a lens between two cables, and a cable that only touches another's loop could
+/// claim it.
 /// On the stress scenes (seeds 11-22) the wide loops taken read 0.68-0.93 round, the
 /// false courses 0.40-0.41. Found in the same search as the close loop, but taken
 /// only after every cable's close loop is, and only for cables with none: the longest
