@@ -465,29 +465,20 @@ fn with_field_and(
 /// In `Crossing` the two cables make one X-shaped piece; its two farthest superpixels
 /// are the ends of one branch each, and the other two ends are seeded as the tips of
 /// its other branches. Nor `CrossingLoop` (its piece of field is one loop with two
-/// tails; not found whole from it), nor `TerminalAgainstCable`,
-/// whose two cables the field joins into one T-shaped piece: the first cable is found,
-/// but the second's end touches the first, so it is the tip of no branch and no walk
-/// along the second reaches a seed. Nor `Mixed`: with no end at all, one cable (of
-/// three) is found, and not along any true one (a 16 px power cable crossed by two 5 px
+/// tails; not found whole from it). Nor `Mixed`: with no end at all, three cables are
+/// found, one of them 94 px off its truth (a 16 px power cable crossed by two 5 px
 /// wires makes one piece; the engine alone, at one scale, serves neither width; from
 /// their ends, as above, all three are found, and from a photo alone the pipeline's
-/// two passes find them, `tests/e2e.rs`). Nor `LoopCrossedByAnother`: with no end,
-/// the orange cable is found and the blue one with its loop is not (from their ends
-/// both are, the tests above). Nor `TerminalBesideCable`: with no end, one of its two
-/// cables is found, with or without the walks passing the terminal beside their cable
-/// (`Walker::runs_on_past`; from their ends both are, the tests above).
+/// two passes find them, `tests/e2e.rs`). In `TerminalAgainstCable` (the field joins
+/// the two cables into one T-shaped piece, and the second's end, touching the first,
+/// is the tip of no branch), `LoopCrossedByAnother` and `TerminalBesideCable`, one
+/// cable of each pair was found alone until a walk that loses the cable along a field
+/// as sure of it as `field_border_sure_level` counted as a cable (its end a terminal
+/// the network missed), not only one reaching the border or a seed (session 57).
 #[test]
 fn cables_whose_ends_were_missed_are_found_from_the_field() {
     use ariadne_dlo::synth::Case;
-    let left_out = [
-        Case::SideBySideThin,
-        Case::CrossingLoop,
-        Case::TerminalAgainstCable,
-        Case::Mixed,
-        Case::LoopCrossedByAnother,
-        Case::TerminalBesideCable,
-    ];
+    let left_out = [Case::SideBySideThin, Case::CrossingLoop, Case::Mixed];
     for case in Case::ALL.into_iter().filter(|c| !left_out.contains(c)) {
         let s = ariadne_dlo::synth::case(case);
         let (found, err) = with_exact_field(&s, &[]);

@@ -7,6 +7,9 @@
 //! count from it. With a field, the two ends of every piece of cable inside the frame
 //! that no cable explains are seeds too ([`super::orphans`]): cables whose ends the
 //! network missed; a walk from one counts when it reaches another seed or the border.
+//! With a field, a walk from either kind of seed also counts where it loses the cable
+//! along a field sure of all it followed (`field_border_sure_level`): a cable with one
+//! end out of view and a terminal the network missed, or missed at both ends.
 
 use super::cable::{Cable, Scene, model_cable, model_course};
 use super::chains::{chain, extend};
@@ -100,7 +103,9 @@ struct SeedCables {
 }
 
 /// The cables walked from `seeds` that reach the border or another seed (one of the
-/// first `targets`) over mostly uncovered superpixels, score at least `min_score`
+/// first `targets`), or, with a field, lose the cable along a field as sure of them as
+/// `field_border_sure_level` (the cable ends there, at a terminal the network missed),
+/// over mostly uncovered superpixels, score at least `min_score`
 /// (with a field, a walk along which it is sure, `field_border_sure_level`, only the
 /// floor of any cable), read as a ridge rather than a step between two backgrounds
 /// across at least `min_ridge_share` of their profiles, and do not lie all along one
@@ -128,8 +133,13 @@ fn cables_from(
         let on_found = w.vertices.iter().filter(|&&v| covered[v as usize]).count();
         (on_found as f32) <= p.border_max_covered * w.vertices.len() as f32
     };
+    // A walk that loses the cable where the field is sure of all it followed counts
+    // too: the cable ends there, at a terminal the network missed.
+    let field = terrain.field.is_some();
+    let ends_sure = |w: &Walk| field && w.cable >= p.field_border_sure_level;
     let crosses = |w: &Walk| {
-        matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
+        (matches!(w.end, WalkEnd::Border | WalkEnd::Seed(_))
+            || (w.end == WalkEnd::Lost && ends_sure(w)))
             && w.length_px >= min_length
             && unexplained(w)
     };
@@ -149,11 +159,11 @@ fn cables_from(
         )
     };
     let confidence = vec![p.border_seed_confidence; seeds.len()];
-    // Only such walks were kept, so every pairing ends on the border or a seed. These
+    // Only such walks were kept, so every pairing ends on the border, a seed or where
+    // a sure field's cable ends. These
     // seeds' floor rises above any cable's, but a walk the field is sure of needs only
     // what an end's cable needs; a hypothesis below its floor could only have claimed
     // ends from others below it, so dropping it in the pairing keeps the rest.
-    let field = terrain.field.is_some();
     let floor = min_score.max(p.cable_score_floor(field));
     let sure = field.then_some((p.field_border_sure_level, p.cable_score_floor(field)));
     // Walks from the border are not joined where they leave it again (no field given),

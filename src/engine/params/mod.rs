@@ -357,7 +357,9 @@ pub struct Params {
     /// needs (`field_min_cable_score`), not `field_border_min_score`. A pale cable on a
     /// pale board crossing the frame has little colour likelihood and lateral contrast
     /// to score by, yet the field sees it whole (README, "How the engine uses the
-    /// field"). 1: only walks over a field certain everywhere (a network's never is).
+    /// field"). Such a walk also counts where it loses the cable (a terminal the
+    /// network missed), not only at the border or another seed. 1: only walks over a
+    /// field certain everywhere (a network's never is).
     pub field_border_sure_level: f32,
     /// `min_cable_score` when the field is used: its share in every score keeps walks
     /// over the background out, so weaker cables (a pale cable on a pale card, whose
