@@ -105,13 +105,13 @@ struct SeedCables {
 /// The cables walked from `seeds` that reach the border or another seed (one of the
 /// first `targets`), or, with a field, lose the cable along a field as sure of them as
 /// `field_border_sure_level` (the cable ends there, at a terminal the network missed),
-/// over mostly uncovered superpixels, score at least `min_score`
-/// (with a field, a walk along which it is sure, `field_border_sure_level`, only the
-/// floor of any cable), read as a ridge rather than a step between two backgrounds
-/// across at least `min_ridge_share` of their profiles, and do not lie all along one
-/// side of the frame, within `border_margin_px` of it: the frame cuts whatever runs
-/// there (a board's edge, a tray's rim, a strip of table), so its profiles cannot be
-/// read, and a cable that close along a whole side would be mostly out of view.
+/// over mostly uncovered superpixels, score at least `min_score` (with a field, a walk
+/// along which it is sure, `field_border_sure_level`, only the floor of any cable),
+/// read as a ridge rather than a step between two backgrounds across at least
+/// `min_ridge_share` of their profiles, and do not lie all along one side of the
+/// frame, within `border_margin_px` of it: the frame cuts whatever runs there (a
+/// board's edge, a tray's rim, a strip of table), so its profiles cannot be read, and
+/// a cable that close along a whole side would be mostly out of view.
 /// With `chained`, the seeds are no cable's ends (the ends of the field's pieces): the
 /// cables found are chained through them into whole ones ([`chain`]) and, with
 /// `field_orphan_run_on`, run on past them where a walk lost the cable further on or
@@ -160,10 +160,10 @@ fn cables_from(
     };
     let confidence = vec![p.border_seed_confidence; seeds.len()];
     // Only such walks were kept, so every pairing ends on the border, a seed or where
-    // a sure field's cable ends. These
-    // seeds' floor rises above any cable's, but a walk the field is sure of needs only
-    // what an end's cable needs; a hypothesis below its floor could only have claimed
-    // ends from others below it, so dropping it in the pairing keeps the rest.
+    // a sure field's cable ends. These seeds' floor rises above any cable's, but a walk
+    // the field is sure of needs only what an end's cable needs; a hypothesis below its
+    // floor could only have claimed ends from others below it, so dropping it in the
+    // pairing keeps the rest.
     let floor = min_score.max(p.cable_score_floor(field));
     let sure = field.then_some((p.field_border_sure_level, p.cable_score_floor(field)));
     // Walks from the border are not joined where they leave it again (no field given),
