@@ -336,11 +336,18 @@ impl Case {
 /// 0.45 rad towards the top at 45 px radius (the loop above the line, about
 /// (290, 285)), 220 px on.
 fn curl() -> Vec<[f32; 2]> {
-    let (radius, turn, straight) = (45.0f32, std::f32::consts::TAU + 0.45, 220);
-    let looped = (turn * radius).round() as usize;
-    let mut path = turning([70.0, 330.0], 0.0, 0.0, straight);
-    path.extend(turning(path[path.len() - 1], 0.0, -turn, looped).split_off(1));
-    path.extend(turning(path[path.len() - 1], -turn, 0.0, straight).split_off(1));
+    looped([70.0, 330.0], 0.0, 45.0, std::f32::consts::TAU + 0.45)
+}
+
+/// A cable with a loop, in 1 px steps: 220 px from `from` setting off at `heading`
+/// (radians, y pointing down), a turn of `turn` radians towards the top (anticlockwise
+/// on screen) at `radius` pixels, and 220 px on.
+fn looped(from: [f32; 2], heading: f32, radius: f32, turn: f32) -> Vec<[f32; 2]> {
+    let straight = 220;
+    let round = (turn * radius).round() as usize;
+    let mut path = turning(from, heading, 0.0, straight);
+    path.extend(turning(path[path.len() - 1], heading, -turn, round).split_off(1));
+    path.extend(turning(path[path.len() - 1], heading - turn, 0.0, straight).split_off(1));
     path
 }
 
@@ -455,11 +462,7 @@ pub fn case(case: Case) -> Scene {
         Case::TangentLoop => {
             // 220 px from (80, 200) heading down and right (0.5 rad), a turn of 2π + 0.6
             // rad towards the top at 60 px radius, 220 px on, heading up and right.
-            let (radius, heading, turn) = (60.0f32, 0.5, std::f32::consts::TAU + 0.6);
-            let looped = (turn * radius).round() as usize;
-            let mut path = turning([80.0, 200.0], heading, 0.0, 220);
-            path.extend(turning(path[path.len() - 1], heading, -turn, looped).split_off(1));
-            path.extend(turning(path[path.len() - 1], heading - turn, 0.0, 220).split_off(1));
+            let path = looped([80.0, 200.0], 0.5, 60.0, std::f32::consts::TAU + 0.6);
             ([226, 224, 218], vec![(path, [200, 40, 40])])
         }
         Case::LoopCrossedByAnother => (
