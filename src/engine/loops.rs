@@ -291,6 +291,7 @@ fn find_loops(cable: &Cable, ground: Ground<'_>) -> [Option<LoopCourse>; 2] {
     let total = arc[arc.len() - 1];
     let margin = END_MARGIN * nominal;
     let spans = [CLOSE, WIDE];
+    let widest = spans.iter().map(|s| s.along).fold(0.0, f32::max);
     let mut found = [None, None];
     for strictness in [&USUAL, &FAINT] {
         // Fainter field than an orphan's: colour keeps the course on its cable.
@@ -308,7 +309,6 @@ fn find_loops(cable: &Cable, ground: Ground<'_>) -> [Option<LoopCourse>; 2] {
             median_lab(graph, course).is_some_and(|c| dist3(c, colour) <= strictness.max_colour_de)
         };
         let mut best: [Option<(f32, LoopCourse)>; 2] = [None, None];
-        let widest = spans.iter().map(|s| s.along).fold(0.0, f32::max);
         for &(a, sa) in &touching {
             let order = cheapest(graph, a, &free, &step_cost, &mut cost, &mut parent);
             for &(b, sb) in &touching {
@@ -329,19 +329,18 @@ fn find_loops(cable: &Cable, ground: Ground<'_>) -> [Option<LoopCourse>; 2] {
                     .iter()
                     .map(|&q| dist(q, crossing))
                     .fold(0.0, f32::max);
+                if length < LOOP_MIN_WIDTHS * nominal || reach < MIN_REACH * nominal {
+                    continue;
+                }
                 let round = roundness(&points);
                 // The spans this course may be the best of so far.
-                let open: Vec<usize> = (0..spans.len())
-                    .filter(|&k| {
-                        found[k].is_none()
-                            && (sa - sb).abs() <= spans[k].along * nominal
-                            && round >= spans[k].roundness
-                            && best[k].as_ref().is_none_or(|(l, _)| *l < length)
-                    })
-                    .collect();
-                if open.is_empty()
-                    || length < LOOP_MIN_WIDTHS * nominal
-                    || reach < MIN_REACH * nominal
+                let open: [bool; 2] = std::array::from_fn(|k| {
+                    found[k].is_none()
+                        && (sa - sb).abs() <= spans[k].along * nominal
+                        && round >= spans[k].roundness
+                        && best[k].as_ref().is_none_or(|(l, _)| *l < length)
+                });
+                if !open.contains(&true)
                     || !points.iter().all(|&q| in_view(q) && no_end(q))
                     || !of_its_colour(&course)
                 {
@@ -352,8 +351,8 @@ fn find_loops(cable: &Cable, ground: Ground<'_>) -> [Option<LoopCourse>; 2] {
                     leaves: sa,
                     returns: sb,
                 };
-                for k in open {
-                    best[k] = Some((length, course.clone()));
+                for (slot, _) in best.iter_mut().zip(open).filter(|&(_, o)| o) {
+                    *slot = Some((length, course.clone()));
                 }
             }
             for &v in &order {
