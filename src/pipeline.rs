@@ -151,8 +151,9 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         .filter(|&next| next != k);
     // At the scale one kind of cable asks for, another may be lost (a power cable
     // among signal wires): the first pass's cables that this scale does not suit, that
-    // start at an end this pass left without a cable, or, enlarged, that have no end
-    // (two thin wires side by side whose gap widens), are taken in. Shrunk for
+    // start at an end this pass left without a cable, or that have no end (enlarged:
+    // two thin wires side by side whose gap widens; shrunk: a pale cable across the
+    // frame, blurred into its board), are taken in. Shrunk for
     // wide cables, the masks keep the first pass's width: the thin cables set the
     // scene's scale, the wide ones are wide cables.
     let mut mixed_mask_scale = None;

@@ -157,6 +157,13 @@ pub fn crosses_itself(line: &[[f32; 2]], min_apart: f32) -> bool {
     })
 }
 
+/// Distance from `p` to the nearest side of a `width` x `height` image (pixel centres
+/// at integers).
+pub fn border_inset(p: [f32; 2], width: usize, height: usize) -> f32 {
+    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
+    p[0].min(p[1]).min(w - p[0]).min(h - p[1])
+}
+
 /// True when every point of `line` lies within `margin` of one and the same side of a
 /// `width` x `height` image (false for an empty line).
 pub fn along_one_side(line: &[[f32; 2]], width: usize, height: usize, margin: f32) -> bool {

@@ -15,7 +15,7 @@ use std::cmp::Ordering;
 
 use image::{RgbImage, imageops};
 
-use super::geometry::{dist, points_near_any, polyline_length};
+use super::geometry::{border_inset, dist, points_near_any, polyline_length};
 use super::{CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
@@ -306,9 +306,13 @@ impl Segmentation {
     /// A cable of `earlier` is taken when its width at this scale is off
     /// `nominal_width_px` by more than `width_tolerance`, or when it starts at an end
     /// this pass left without a cable (a pale wire that scores under the floor at this
-    /// pass's size: the end is the same one, and the other pass followed it), or, when
-    /// this pass is the larger, when it has no end (a cable crossing the frame that the
-    /// enlarged pass lost: two thin wires side by side, whose gap widens), provided
+    /// pass's size: the end is the same one, and the other pass followed it), or when
+    /// it has no end and, when this pass is the smaller, runs from border to border
+    /// (within `border_margin_px` of the frame at both ends): a cable crossing the
+    /// frame that this pass lost (two thin wires side by side, whose gap widens in an
+    /// enlarged pass; a pale cable on a pale board, whose contrast a shrunk pass blurs
+    /// into the board), not a walk at a scale too large for the cables that ends along
+    /// one of their edges or over the background's texture; provided
     /// it is at least [`WHOLE_MIN_LENGTH`] nominal widths long at its own scale and
     /// fewer than [`EXPLAINED_SHARE`] of its points lie near this pass's cables (within
     /// half their width plus its own). Its ends come along: an end of this pass within
@@ -328,6 +332,9 @@ impl Segmentation {
         let own = self.cables.len();
         let min_length = WHOLE_MIN_LENGTH * params.nominal_width_px / earlier.working_scale;
         let enlarged = self.working_scale > earlier.working_scale;
+        let [width, height] = [self.width, self.height].map(|v| v as usize);
+        let margin = params.border_margin_px / earlier.working_scale;
+        let at_frame = |p: &[f32; 2]| border_inset(*p, width, height) <= margin;
         let mut taken = 0;
         for mut cable in earlier.cables {
             let same = |i: usize| {
@@ -343,7 +350,11 @@ impl Segmentation {
             }
             let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
             let unsuited = off_by_more(ratio, params.width_tolerance);
-            let no_end = enlarged && cable.end_indices.iter().all(Option::is_none);
+            let no_end = cable.end_indices.iter().all(Option::is_none)
+                && (enlarged
+                    || [cable.polyline.first(), cable.polyline.last()]
+                        .into_iter()
+                        .all(|p| p.is_some_and(at_frame)));
             if !(unsuited || no_end || ends_here().next().is_some()) || cable.length_px < min_length
             {
                 continue;
@@ -601,11 +612,32 @@ mod tests {
         assert_eq!(seg.cables[1].ends, [[400.0, 0.0], [639.0, 300.0]]);
         assert_eq!(seg.cables[1].end_indices, [None, None]);
         assert_eq!((points.len(), seg.end_cables.len()), (2, 2));
-        // A pass shrunk to half for wide cables takes no such cable: the first pass
-        // walked their edges.
+    }
+
+    #[test]
+    fn a_shrunk_pass_takes_only_cables_with_no_end_that_cross_the_frame() {
+        // The second pass, at half the size, found one cable between its ends 0 and 1.
         let (mut seg, mut points, mut confidences) = second_pass(16.0, [300.0, 100.0]);
-        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier(16.0), no_ends, &p);
-        assert_eq!(taken, 0);
+        let earlier = found(
+            1.0,
+            vec![
+                // Across the frame (a pale cable on a pale board that the shrunk pass
+                // blurred into it): taken.
+                wide(0, [[200.0, 0.0], [639.0, 250.0]], [None, None], 16.0),
+                // From inside the frame to the border (an edge of something wider, or
+                // a stroke of the background, walked at a scale that suits neither).
+                wide(1, [[50.0, 200.0], [0.0, 450.0]], [None, None], 16.0),
+                // Inside the frame all along.
+                wide(2, [[50.0, 100.0], [400.0, 150.0]], [None, None], 16.0),
+            ],
+            Vec::new(),
+        );
+        let no_ends: (&[[f64; 2]], &[f32]) = (&[], &[]);
+        let p = Params::default();
+        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier, no_ends, &p);
+        assert_eq!(taken, 1);
+        assert_eq!(seg.cables[1].ends, [[200.0, 0.0], [639.0, 250.0]]);
+        assert_eq!(seg.cables[1].end_indices, [None, None]);
     }
 
     /// Readings of `(width, length, score)`.

@@ -21,7 +21,8 @@ use super::cable::{Cable, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::CableField;
 use super::geometry::{
-    along_one_side, border_exit, dist, heading, points_near_any, polyline_length, unit_or,
+    along_one_side, border_exit, border_inset, dist, heading, points_near_any, polyline_length,
+    unit_or,
 };
 
 /// A trace's step, in field cells: fine enough to follow a bend of a cable a few cells
@@ -176,7 +177,7 @@ fn run_on_lost(
 ) {
     let (field, params) = (ground.field, ground.params);
     let cell = cell_side(field);
-    let [w, h] = ground.size.map(|v| v as f32);
+    let [width, height] = ground.size;
     let margin = params.border_margin_px;
     for k in 0..cables.len() {
         for side in 0..2 {
@@ -186,13 +187,7 @@ fn run_on_lost(
                 line.reverse();
             }
             let end = line[line.len() - 1];
-            if cable.end_indices[side].is_some()
-                || end[0]
-                    .min(end[1])
-                    .min(w - 1.0 - end[0])
-                    .min(h - 1.0 - end[1])
-                    < margin
-            {
+            if cable.end_indices[side].is_some() || border_inset(end, width, height) < margin {
                 continue;
             }
             if line.len() < 2 {
