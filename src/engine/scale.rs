@@ -32,6 +32,15 @@ pub const MAX_CORRECTION: f64 = 2.0;
 /// 8-12 px cables read 3.1 px and was enlarged twice, where hardly anything was found.
 const CREDIBLE_SCORE_SHARE: f32 = 0.25;
 
+/// Share of the best cable's score from which a whole cable's width counts in
+/// bounding how far the photo is shrunk ([`thin_width`]): lower than
+/// [`CREDIBLE_SCORE_SHARE`], because a wire beside a power cable scores less than it
+/// (a wire from the border to a missed terminal, walked from the border, 0.19 of the
+/// power cable's score: left out of the bound, the wires were shrunk to 3 px). On the
+/// zoomed development photos, walks along the edges of cables too wide for the first
+/// pass or along wood grain score 0.04-0.07 of the best and would hold the shrink back.
+const THIN_SCORE_SHARE: f32 = 0.1;
+
 /// Cable probability from which a field cell counts as cable for
 /// [`too_wide_for_the_field`].
 const FIELD_CABLE_LEVEL: f32 = 0.5;
@@ -272,19 +281,22 @@ impl Segmentation {
     /// is no cable to measure.
     fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let scale = frame.scale();
-        let readings = credible(
-            self.cables
-                .iter()
-                .map(|c| Reading {
-                    width: c.width_px * scale,
-                    length: c.length_px * scale,
-                    score: c.score,
-                })
-                .filter(|r| r.width.is_finite() && r.width > 0.0)
-                .collect(),
-        );
+        let all: Vec<Reading> = self
+            .cables
+            .iter()
+            .map(|c| Reading {
+                width: c.width_px * scale,
+                length: c.length_px * scale,
+                score: c.score,
+            })
+            .filter(|r| r.width.is_finite() && r.width > 0.0)
+            .collect();
         let nominal = params.nominal_width_px;
-        let thin = thin_width(&readings, WHOLE_MIN_LENGTH * nominal);
+        let thin = thin_width(
+            &credible(all.clone(), THIN_SCORE_SHARE),
+            WHOLE_MIN_LENGTH * nominal,
+        );
+        let readings = credible(all, CREDIBLE_SCORE_SHARE);
         let ratio = f64::from(nominal) / measured_width(readings, nominal)?;
         let floor = thin.map_or(0.0, |thin| {
             (f64::from(nominal / params.width_tolerance) / thin).min(1.0)
@@ -420,18 +432,18 @@ struct Reading {
 }
 
 /// The readings of `readings` that are credible cables: those scoring at least
-/// [`CREDIBLE_SCORE_SHARE`] of the best score.
-fn credible(readings: Vec<Reading>) -> Vec<Reading> {
+/// `share` of the best score.
+fn credible(readings: Vec<Reading>, share: f32) -> Vec<Reading> {
     let best = readings.iter().map(|r| r.score).fold(0.0, f32::max);
     readings
         .into_iter()
-        .filter(|r| r.score >= CREDIBLE_SCORE_SHARE * best)
+        .filter(|r| r.score >= share * best)
         .collect()
 }
 
-/// The width at most which two cables of `readings` ([`credible`] ones) at least
-/// `min_length` long read (the second narrowest), in working pixels; `None` when there
-/// are not two.
+/// The width at most which two cables of `readings` (those [`credible`] at
+/// [`THIN_SCORE_SHARE`]) at least `min_length` long read (the second narrowest), in
+/// working pixels; `None` when there are not two.
 /// One reading can be wrong: zoomed 3x, a two-tone cable about 20 px wide walked along
 /// one of its colours read 6.6 px (simple/00023), and bounding the shrink by it cost
 /// the zoom rows up to 0.025.
@@ -689,6 +701,17 @@ mod tests {
         for wires in [with(&[(600.0, 7.0)]), with(&[(600.0, 7.0), (130.0, 7.0)])] {
             assert_eq!(wires.width_correction(&vga, &p), Some(shrink));
         }
+        // Wires scoring a fifth of the power cables' are left out of the width read but
+        // still bound the shrink; strokes at a twentieth bound nothing.
+        let scored = |score: f32| {
+            let mut seg = with(&[(600.0, 6.5), (600.0, 7.0)]);
+            for wire in &mut seg.cables[4..] {
+                wire.score = score;
+            }
+            seg.width_correction(&vga, &p)
+        };
+        assert_eq!(scored(0.1), None);
+        assert_eq!(scored(0.025), Some(shrink));
         // Thin rods ask for an enlargement, which nothing bounds.
         let rods = found(
             1.0,
@@ -720,11 +743,14 @@ mod tests {
             (3.1, 57.0, 0.03),
             (3.1, 77.0, 0.02),
         ];
-        assert_eq!(measured_width(credible(readings(&scene)), 7.8), Some(8.0));
+        assert_eq!(
+            measured_width(credible(readings(&scene), CREDIBLE_SCORE_SHARE), 7.8),
+            Some(8.0)
+        );
         // Scored alike, the strokes are the median.
         let alike = scene.map(|(w, l, _)| (w, l, 0.5));
         assert_eq!(
-            measured_width(credible(readings(&alike)), 7.8),
+            measured_width(credible(readings(&alike), CREDIBLE_SCORE_SHARE), 7.8),
             Some(3.1f32.into())
         );
     }
