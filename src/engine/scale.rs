@@ -603,26 +603,28 @@ mod tests {
         let mut points = vec![ends[0].map(f64::from), ends[1].map(f64::from)];
         let mut confidences = vec![0.9, 0.9];
         // The first pass's cables with no end, as wide as the second pass's scale
-        // suits (`width_px` there is nominal).
-        let earlier = |width_px: f32| {
-            found(
-                1.0,
-                vec![
-                    // Across a corner of the frame (two wires side by side, whose gap
-                    // the enlarged pass took for background): taken.
-                    wide(0, [[400.0, 0.0], [639.0, 300.0]], [None, None], width_px),
-                    // Along this pass's cable: explained by it.
-                    wide(1, [[100.0, 402.0], [540.0, 402.0]], [None, None], width_px),
-                ],
-                Vec::new(),
-            )
-        };
+        // suits (4 px there is nominal).
+        let earlier = found(
+            1.0,
+            vec![
+                // Across a corner of the frame (two wires side by side, whose gap the
+                // enlarged pass took for background): taken.
+                wide(0, [[400.0, 0.0], [639.0, 300.0]], [None, None], 4.0),
+                // Along this pass's cable: explained by it.
+                wide(1, [[100.0, 402.0], [540.0, 402.0]], [None, None], 4.0),
+                // Inside the frame all along (ends the network missed): an enlarged
+                // pass takes it too.
+                wide(2, [[50.0, 100.0], [400.0, 150.0]], [None, None], 4.0),
+            ],
+            Vec::new(),
+        );
         let p = Params::default();
         let no_ends: (&[[f64; 2]], &[f32]) = (&[], &[]);
-        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier(4.0), no_ends, &p);
-        assert_eq!(taken, 1);
+        let taken = seg.adopt_lost(&mut points, &mut confidences, earlier, no_ends, &p);
+        assert_eq!(taken, 2);
         assert_eq!(seg.cables[1].ends, [[400.0, 0.0], [639.0, 300.0]]);
         assert_eq!(seg.cables[1].end_indices, [None, None]);
+        assert_eq!(seg.cables[2].ends, [[50.0, 100.0], [400.0, 150.0]]);
         assert_eq!((points.len(), seg.end_cables.len()), (2, 2));
     }
 
