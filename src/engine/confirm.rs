@@ -6,7 +6,7 @@
 //! cable: where one cable passes under another the network sees a weak end, and a walk
 //! that lost its cable there stops on it.
 
-use super::geometry::dist;
+use super::geometry::{border_inset, dist};
 use super::{Cable, Segmentation};
 
 impl Segmentation {
@@ -28,10 +28,8 @@ impl Segmentation {
         if reach_px <= 0.0 {
             return Vec::new();
         }
-        let (w, h) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        let inside = |p: [f32; 2]| {
-            p[0] > margin_px && p[1] > margin_px && p[0] < w - margin_px && p[1] < h - margin_px
-        };
+        let [w, h] = [self.width, self.height].map(|v| v as usize);
+        let inside = |p: [f32; 2]| border_inset(p, w, h) > margin_px;
         let points: Vec<[f32; 2]> = candidates.iter().map(|q| q.map(|v| v as f32)).collect();
         // For each candidate, the cables it lies on.
         let on: Vec<Vec<usize>> = points

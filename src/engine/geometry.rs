@@ -157,20 +157,29 @@ pub fn crosses_itself(line: &[[f32; 2]], min_apart: f32) -> bool {
     })
 }
 
+/// Distances from `p` to the left, top, right and bottom sides of a `width` x `height`
+/// image (pixel centres at integers).
+fn insets(p: [f32; 2], width: usize, height: usize) -> [f32; 4] {
+    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
+    [p[0], p[1], w - p[0], h - p[1]]
+}
+
 /// Distance from `p` to the nearest side of a `width` x `height` image (pixel centres
 /// at integers).
 pub fn border_inset(p: [f32; 2], width: usize, height: usize) -> f32 {
-    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
-    p[0].min(p[1]).min(w - p[0]).min(h - p[1])
+    insets(p, width, height)
+        .into_iter()
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// True when every point of `line` lies within `margin` of one and the same side of a
 /// `width` x `height` image (false for an empty line).
 pub fn along_one_side(line: &[[f32; 2]], width: usize, height: usize, margin: f32) -> bool {
-    let (w, h) = ((width - 1) as f32, (height - 1) as f32);
-    // A point's distances to the left, top, right and bottom sides.
-    let insets = |p: [f32; 2]| [p[0], p[1], w - p[0], h - p[1]];
-    !line.is_empty() && (0..4).any(|side| line.iter().all(|&p| insets(p)[side] <= margin))
+    !line.is_empty()
+        && (0..4).any(|side| {
+            line.iter()
+                .all(|&p| insets(p, width, height)[side] <= margin)
+        })
 }
 
 #[cfg(test)]

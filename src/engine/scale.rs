@@ -293,10 +293,10 @@ impl Segmentation {
             .collect();
         let nominal = params.nominal_width_px;
         let thin = thin_width(
-            &credible(all.clone(), THIN_SCORE_SHARE),
+            &credible(&all, THIN_SCORE_SHARE),
             WHOLE_MIN_LENGTH * nominal,
         );
-        let readings = credible(all, CREDIBLE_SCORE_SHARE);
+        let readings = credible(&all, CREDIBLE_SCORE_SHARE);
         let ratio = f64::from(nominal) / measured_width(readings, nominal)?;
         let floor = thin.map_or(0.0, |thin| {
             (f64::from(nominal / params.width_tolerance) / thin).min(1.0)
@@ -433,11 +433,12 @@ struct Reading {
 
 /// The readings of `readings` that are credible cables: those scoring at least
 /// `share` of the best score.
-fn credible(readings: Vec<Reading>, share: f32) -> Vec<Reading> {
+fn credible(readings: &[Reading], share: f32) -> Vec<Reading> {
     let best = readings.iter().map(|r| r.score).fold(0.0, f32::max);
     readings
-        .into_iter()
+        .iter()
         .filter(|r| r.score >= share * best)
+        .copied()
         .collect()
 }
 
@@ -746,13 +747,13 @@ mod tests {
             (3.1, 77.0, 0.02),
         ];
         assert_eq!(
-            measured_width(credible(readings(&scene), CREDIBLE_SCORE_SHARE), 7.8),
+            measured_width(credible(&readings(&scene), CREDIBLE_SCORE_SHARE), 7.8),
             Some(8.0)
         );
         // Scored alike, the strokes are the median.
         let alike = scene.map(|(w, l, _)| (w, l, 0.5));
         assert_eq!(
-            measured_width(credible(readings(&alike), CREDIBLE_SCORE_SHARE), 7.8),
+            measured_width(credible(&readings(&alike), CREDIBLE_SCORE_SHARE), 7.8),
             Some(3.1f32.into())
         );
     }
