@@ -10,6 +10,7 @@
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
+use ariadne_dlo::engine::resample::{self, Kernel};
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
 use ariadne_dlo::engine::{self, MaskKind, Params, exposure, render, sharpness};
 use ariadne_dlo::pipeline;
@@ -187,6 +188,22 @@ fn exposure_640x480(bencher: divan::Bencher) {
         let gain = exposure::gain(&dim, p.exposure_level, p.exposure_max_gain);
         exposure::apply(&dim, gain).into_owned()
     });
+}
+
+/// Working sizes a second pass resamples a 640x480 photo to: enlarged 1.64 times
+/// (thin rods, Catmull-Rom) and shrunk to 0.8 (wide cables, triangle).
+const RESAMPLED_SIZES: [(u32, u32); 2] = [(1051, 788), (512, 384)];
+
+/// A development photo resampled to each of [`RESAMPLED_SIZES`].
+#[divan::bench(args = RESAMPLED_SIZES, sample_count = 30)]
+fn resample_640x480(bencher: divan::Bencher, size: (u32, u32)) {
+    let fx = fixtures();
+    let kernel = if size.0 > 640 {
+        Kernel::CatmullRom
+    } else {
+        Kernel::Triangle
+    };
+    bencher.bench_local(|| resample::resize(&fx[0].image, size.0, size.1, kernel));
 }
 
 /// The sharpness reading of a development photo (sharp: it pays the reading alone).

@@ -10,6 +10,8 @@ use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
+use crate::engine::resample::{Kernel, weights};
+
 use super::output::{self, Decoding, Letterbox, YoloLayout};
 use super::{DetectError, DetectorConfig, EndpointDetector, ModelKind, Perception, field, locate};
 
@@ -255,8 +257,8 @@ fn input_tensor(image: &RgbImage, fit: Letterbox, pad: f32) -> Vec<f32> {
     let [left, top] = fit.offset;
     let [rw, rh] = fit.resized().map(|v| v as usize);
     let (sw, sh) = (image.width() as usize, image.height() as usize);
-    let columns = triangle_weights(sw, rw);
-    let rows = triangle_weights(sh, rh);
+    let columns = weights(sw, rw, Kernel::Triangle);
+    let rows = weights(sh, rh, Kernel::Triangle);
     // Horizontal pass: every source row, resized columns, one plane per channel.
     let mut narrow = vec![0.0f32; 3 * sh * rw];
     for (y, src) in image.as_raw().chunks_exact(sw * 3).enumerate() {
@@ -290,30 +292,6 @@ fn input_tensor(image: &RgbImage, fit: Letterbox, pad: f32) -> Vec<f32> {
         }
     }
     tensor
-}
-
-/// For each of `dst` output samples over `src` input samples: the first input index and
-/// the normalised weights of the triangle filter, widened by the reduction factor.
-fn triangle_weights(src: usize, dst: usize) -> Vec<(usize, Vec<f32>)> {
-    let scale = src as f32 / dst as f32;
-    let support = scale.max(1.0);
-    (0..dst)
-        .map(|o| {
-            let centre = (o as f32 + 0.5) * scale;
-            let lo = (centre - support).floor().max(0.0) as usize;
-            let hi = ((centre + support).ceil() as usize).clamp(lo + 1, src);
-            let mut weights: Vec<f32> = (lo..hi)
-                .map(|x| (1.0 - ((x as f32 + 0.5 - centre) / support).abs()).max(0.0))
-                .collect();
-            let sum: f32 = weights.iter().sum();
-            if sum > 0.0 {
-                weights.iter_mut().for_each(|v| *v /= sum);
-            } else {
-                weights.iter_mut().for_each(|v| *v = 1.0 / (hi - lo) as f32);
-            }
-            (lo, weights)
-        })
-        .collect()
 }
 
 /// Loads the ONNX Runtime library once per process and builds its environment.

@@ -35,6 +35,7 @@ pub mod pairing;
 mod params;
 pub mod refine;
 pub mod render;
+pub mod resample;
 mod scale;
 pub mod sharpness;
 pub mod spline;

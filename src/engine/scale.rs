@@ -13,9 +13,10 @@
 use std::borrow::Cow;
 use std::cmp::Ordering;
 
-use image::{RgbImage, imageops};
+use image::RgbImage;
 
 use super::geometry::{border_inset, dist, points_near_any, polyline_length};
+use super::resample::{Kernel, box_shrink, resize};
 use super::{CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
@@ -179,45 +180,14 @@ impl WorkingFrame {
         } else if 2 * w <= self.photo[0] && 2 * h <= self.photo[1] {
             Cow::Owned(box_shrink(photo, w, h))
         } else {
-            let filter = if self.enlarges() {
-                imageops::FilterType::CatmullRom
+            let kernel = if self.enlarges() {
+                Kernel::CatmullRom
             } else {
-                imageops::FilterType::Triangle
+                Kernel::Triangle
             };
-            Cow::Owned(imageops::resize(photo, w, h, filter))
+            Cow::Owned(resize(photo, w, h, kernel))
         }
     }
-}
-
-/// `src` shrunk to `w` x `h` (each at most half of `src`'s): output pixel (x, y) is
-/// the mean of the source pixels from `x·W/w` to `(x+1)·W/w` (and likewise in y).
-fn box_shrink(src: &RgbImage, w: u32, h: u32) -> RgbImage {
-    let (sw, sh) = (src.width() as usize, src.height() as usize);
-    let (w, h) = (w as usize, h as usize);
-    // The source columns of each output column, as byte offsets into a row.
-    let cols: Vec<(usize, usize)> = (0..w)
-        .map(|x| (x * sw / w * 3, (x + 1) * sw / w * 3))
-        .collect();
-    let raw = src.as_raw();
-    let mut sums = vec![0u32; sw * 3];
-    let mut out = Vec::with_capacity(w * h * 3);
-    for y in 0..h {
-        let (y0, y1) = (y * sh / h, (y + 1) * sh / h);
-        sums.fill(0);
-        for row in raw[y0 * sw * 3..y1 * sw * 3].chunks_exact(sw * 3) {
-            for (s, &v) in sums.iter_mut().zip(row) {
-                *s += v as u32;
-            }
-        }
-        for &(a, b) in &cols {
-            let n = ((b - a) / 3 * (y1 - y0)) as u32;
-            for c in 0..3 {
-                let total: u32 = sums[a + c..b].iter().step_by(3).sum();
-                out.push(((total + n / 2) / n) as u8);
-            }
-        }
-    }
-    RgbImage::from_raw(w as u32, h as u32, out).expect("w x h x 3 bytes")
 }
 
 impl Segmentation {
@@ -775,23 +745,6 @@ mod tests {
         assert_eq!(WorkingFrame::choose(160, 120, &p).working, [640, 480]);
         assert_eq!(WorkingFrame::choose(100, 100, &p).working, [400, 400]);
         assert_eq!(WorkingFrame::choose(10, 10, &p).working, [40, 40]);
-    }
-
-    #[test]
-    fn shrinking_averages_boxes() {
-        // 6x4 → 3x2: each output pixel is the mean of a 2x2 block.
-        let src = RgbImage::from_fn(6, 4, |x, y| image::Rgb([(10 * x + 60 * y) as u8, 0, 255]));
-        let out = box_shrink(&src, 3, 2);
-        assert_eq!(out.dimensions(), (3, 2));
-        for (x, y, p) in out.enumerate_pixels() {
-            let mean = (10 * (2 * x) + 5 + 60 * (2 * y) + 30) as u8;
-            assert_eq!(p.0, [mean, 0, 255], "({x}, {y})");
-        }
-        // Uneven boxes: 5 → 2 columns averages 2 then 3 of them.
-        let row = RgbImage::from_fn(5, 2, |x, _| {
-            image::Rgb([[0, 10, 20, 30, 40][x as usize]; 3])
-        });
-        assert_eq!(box_shrink(&row, 2, 1).as_raw(), &[5, 5, 5, 30, 30, 30]);
     }
 
     #[test]

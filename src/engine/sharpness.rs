@@ -15,6 +15,7 @@ use image::RgbImage;
 
 use super::Params;
 use super::color::{blur_plane, gaussian_kernel};
+use super::resample::nearest_byte;
 
 /// A photo is sharpened when its edges are wider than `sharp_edge_px` by more than
 /// this factor. The development photos read 1.02-1.09 px against 1.05; the same
@@ -105,7 +106,7 @@ pub fn sharpen(image: &RgbImage, sigma: f32, amount: f32) -> RgbImage {
         blur_plane(&mut blurred, &mut scratch, w, h, &kernel);
         for (p, b) in out.pixels_mut().zip(&blurred) {
             let v = f32::from(p.0[c]);
-            p.0[c] = (v + amount * (v - b)).round().clamp(0.0, 255.0) as u8;
+            p.0[c] = nearest_byte(v + amount * (v - b));
         }
     }
     out
