@@ -251,6 +251,11 @@ pub struct EvalArgs {
     /// focus), in [0, 10].
     #[arg(long, default_value_t = 0.0)]
     pub blur: f64,
+    /// Add sensor noise to every photo: Gaussian, of this σ in levels of 0-255, on
+    /// every channel of every pixel (the same noise for a photo on every run), in
+    /// [0, 50].
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

@@ -100,32 +100,39 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
             );
         }
     };
-    if !(1.0..=8.0).contains(&args.zoom) {
-        return Err(CliError::BadOptions(format!(
-            "--zoom {}: expected a factor in [1, 8]",
-            args.zoom
-        )));
-    }
-    if !(args.exposure > 0.0 && args.exposure <= 1.0) {
-        return Err(CliError::BadOptions(format!(
-            "--exposure {}: expected a factor in (0, 1]",
-            args.exposure
-        )));
-    }
-    if !(0.0..=10.0).contains(&args.blur) {
-        return Err(CliError::BadOptions(format!(
-            "--blur {}: expected a σ in [0, 10] pixels",
-            args.blur
-        )));
-    }
+    check(
+        (1.0..=8.0).contains(&args.zoom),
+        "--zoom",
+        args.zoom,
+        "a factor in [1, 8]",
+    )?;
+    check(
+        args.exposure > 0.0 && args.exposure <= 1.0,
+        "--exposure",
+        args.exposure,
+        "a factor in (0, 1]",
+    )?;
+    check(
+        (0.0..=10.0).contains(&args.blur),
+        "--blur",
+        args.blur,
+        "a σ in [0, 10] pixels",
+    )?;
+    check(
+        (0.0..=50.0).contains(&args.noise),
+        "--noise",
+        args.noise,
+        "a σ in [0, 50] levels",
+    )?;
     let mut images = Vec::new();
     let mut scales = Vec::new();
     for &scale in &args.scale {
-        if !(scale > 0.0 && scale <= 8.0) {
-            return Err(CliError::BadOptions(format!(
-                "--scale {scale}: expected factors in (0, 8]"
-            )));
-        }
+        check(
+            scale > 0.0 && scale <= 8.0,
+            "--scale",
+            scale,
+            "factors in (0, 8]",
+        )?;
         let setup = eval::Setup {
             network: Some(&network),
             ends,
@@ -134,6 +141,7 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
                 zoom: args.zoom,
                 exposure: args.exposure,
                 blur: args.blur,
+                noise: args.noise,
             },
         };
         let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;
@@ -171,4 +179,30 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// `Ok` when `ok`; else the error naming `flag`, its `value` and what it `expects`.
+fn check(ok: bool, flag: &str, value: f64, expects: &str) -> Result<(), CliError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(CliError::OutOfRange(format!(
+            "{flag} {value}: expected {expects}"
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_argument_out_of_range_is_named_with_what_it_expects() {
+        assert!(check(true, "--noise", 12.0, "a σ in [0, 50] levels").is_ok());
+        let err = check(false, "--noise", 60.0, "a σ in [0, 50] levels").unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "--noise 60: expected a σ in [0, 50] levels"
+        );
+    }
 }

@@ -49,6 +49,9 @@ pub enum CliError {
     /// Bad --options.
     #[error("--options must be a JSON object of parameter overrides: {0}")]
     BadOptions(String),
+    /// A numeric argument outside its range.
+    #[error("{0}")]
+    OutOfRange(String),
     /// The image could not be segmented.
     #[error("{0}: {1}")]
     Image(PathBuf, PipelineError),

@@ -37,6 +37,8 @@ pub struct ImageResult {
     pub exposure: f64,
     /// σ of the blur over the photo, pixels.
     pub blur: f64,
+    /// σ of the noise added to the photo, levels of 0-255.
+    pub noise: f64,
     /// Cables in the ground truth.
     pub gt_cables: usize,
     /// Cables found.
@@ -140,6 +142,7 @@ pub fn evaluate_sample(
         zoom: setup.camera.zoom,
         exposure: setup.camera.exposure,
         blur: setup.camera.blur,
+        noise: setup.camera.noise,
         gt_cables: view.cable_masks.len(),
         found_cables: seg.cables.len(),
         matched_cables,

@@ -6,6 +6,7 @@
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
 use crate::engine::resample::{self, Kernel};
+use crate::synth::Rng;
 
 use super::dataset::{BORDER_TOLERANCE_PX, DatasetError, Sample, terminal_ends};
 
@@ -24,6 +25,10 @@ pub struct Camera {
     /// σ, pixels of the made photo, of a Gaussian blur over it (a soft lens); 0 keeps
     /// it as sharp as it is.
     pub blur: f64,
+    /// σ, levels of 0-255, of Gaussian noise added to every channel of every pixel (a
+    /// small or hot sensor, a dim cell at high gain), the same for a photo on every
+    /// run; 0 adds none.
+    pub noise: f64,
 }
 
 impl Default for Camera {
@@ -33,6 +38,7 @@ impl Default for Camera {
             zoom: 1.0,
             exposure: 1.0,
             blur: 0.0,
+            noise: 0.0,
         }
     }
 }
@@ -58,7 +64,8 @@ impl View {
     /// `sample` as `camera` sees it (the default camera: as it is, bytes untouched).
     /// The photo is enlarged with Catmull-Rom (sharp, as a finer sensor would see it)
     /// and shrunk with a triangle filter (averaging, as a coarser one would), then its
-    /// values are multiplied by the exposure factor and it is blurred; masks are
+    /// values are multiplied by the exposure factor, it is blurred and noise is added
+    /// (seeded by the sample's set and name); masks are
     /// resampled with a triangle filter and thresholded at half; a cable whose mask
     /// leaves the view is dropped from the truth.
     pub fn of(sample: &Sample, camera: Camera) -> Result<Self, DatasetError> {
@@ -103,6 +110,9 @@ impl View {
         }
         if camera.blur > 0.0 {
             resized = crate::engine::sharpness::blurred(&resized, camera.blur as f32);
+        }
+        if camera.noise > 0.0 {
+            add_noise(&mut resized, camera.noise, seed(sample));
         }
         let mut png = std::io::Cursor::new(Vec::new());
         resized
@@ -155,5 +165,52 @@ impl View {
             terminals,
             centrelines,
         })
+    }
+}
+
+/// A seed of `sample`'s set and name (FNV-1a), so that each photo gets its own noise,
+/// the same on every run and machine.
+fn seed(sample: &Sample) -> u64 {
+    let text = format!("{}/{}", sample.set, sample.name);
+    text.bytes().fold(0xCBF2_9CE4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
+    })
+}
+
+/// Adds Gaussian noise of standard deviation `sigma` levels to every channel of
+/// `image` (Box-Muller on [`Rng`] from `seed`), rounded and clipped to 0-255.
+fn add_noise(image: &mut image::RgbImage, sigma: f64, seed: u64) {
+    let mut rng = Rng::new(seed);
+    for v in image.iter_mut() {
+        let u1 = f64::from(rng.range(0.0, 1.0)).max(1e-12);
+        let u2 = f64::from(rng.range(0.0, 1.0));
+        let normal = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+        *v = (f64::from(*v) + sigma * normal).round().clamp(0.0, 255.0) as u8;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_has_the_asked_spread_and_repeats_with_its_seed() {
+        let grey = image::RgbImage::from_pixel(200, 100, image::Rgb([128, 128, 128]));
+        let (mut a, mut b, mut c) = (grey.clone(), grey.clone(), grey);
+        add_noise(&mut a, 10.0, 7);
+        add_noise(&mut b, 10.0, 7);
+        add_noise(&mut c, 10.0, 8);
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+        let n = a.as_raw().len() as f64;
+        let mean = a.as_raw().iter().map(|&v| f64::from(v)).sum::<f64>() / n;
+        let var = a
+            .as_raw()
+            .iter()
+            .map(|&v| (f64::from(v) - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        assert!((mean - 128.0).abs() < 0.3, "mean {mean}");
+        assert!((var.sqrt() - 10.0).abs() < 0.3, "σ {}", var.sqrt());
     }
 }
