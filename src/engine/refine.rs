@@ -261,11 +261,12 @@ fn read_profile(
     let (lo, hi) = across_outline(profile, &m, (lo, hi), centre, settings);
     let across = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
     Some(Reading {
-        plain: across(without_shadowed_flanks(
+        plain: across(with_bordering_highlights(
             profile,
             [left_bg, right_bg],
-            cable,
-            (m, lo, hi),
+            &fg,
+            without_shadowed_flanks(profile, [left_bg, right_bg], cable, (m, lo, hi)),
+            min_de,
         ))?,
         lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
             .and_then(across),
@@ -332,6 +333,64 @@ fn without_shadowed_flanks(
         m[j] = -m[j];
     }
     (m, a, b)
+}
+
+/// The run `lo..=hi` (margins `m`) widened over a highlight beside it: samples lighter
+/// than the background by more than half `min_de` and lighter than the run, the
+/// cable's lit flank. A pale cable lit from one side shows less contrast there than on
+/// its shaded flank, so half the profile's peak cuts its lit edge off and pulls the
+/// centre toward the shade (a cream cable on pale blue card read its centre 1.7 px
+/// into its shadow). A cast shadow is never lighter than what it falls on, and the
+/// blurred edge of a light cable on a dark table is darker than the cable, so neither
+/// is taken in. The highlight ends at half its own highest contrast (`fg`), and reaches
+/// at most half the run's width beyond it.
+fn with_bordering_highlights(
+    profile: &[[f32; 3]],
+    bg: [[f32; 3]; 2],
+    fg: &[f32],
+    (mut m, lo, hi): (Vec<f32>, usize, usize),
+    min_de: f32,
+) -> (Vec<f32>, usize, usize) {
+    let run_light = mean_lab(&profile[lo..=hi])[0];
+    let lit =
+        |j: usize| against_background(profile[j], bg).0 > 0.5 * min_de && profile[j][0] > run_light;
+    // Half the run's width of hi - lo + 1 samples, rounded down.
+    let reach = (hi - lo).div_ceil(2);
+    // The highlight's samples from `first` outward (`step` ±1), within the reach and
+    // the profile (one sample kept beyond for the edge).
+    let highlight = |first: usize, step: isize| -> Vec<usize> {
+        (0..reach as isize)
+            .map(|d| first as isize + step * d)
+            .take_while(|&j| j >= 1 && (j as usize) + 1 < profile.len() && lit(j as usize))
+            .map(|j| j as usize)
+            .collect()
+    };
+    let mut widen = |run: Vec<usize>, end: usize| -> usize {
+        let Some(peak) = run.iter().map(|&j| fg[j]).reduce(f32::max) else {
+            return end;
+        };
+        let half = 0.5 * peak;
+        let kept: Vec<usize> = run.into_iter().take_while(|&j| fg[j] > half).collect();
+        let Some(&last) = kept.last() else {
+            return end;
+        };
+        // Margins against the highlight's half maximum across its outer edge.
+        let beyond = if last > end { last + 1 } else { last - 1 };
+        for j in kept.iter().copied().chain([beyond]) {
+            m[j] = fg[j] - half;
+        }
+        if m[beyond] > 0.0 {
+            m[beyond] = -f32::EPSILON;
+        }
+        last
+    };
+    let new_lo = if lo >= 2 {
+        widen(highlight(lo - 1, -1), lo)
+    } else {
+        lo
+    };
+    let new_hi = widen(highlight(hi + 1, 1), hi);
+    (m, new_lo, new_hi)
 }
 
 /// The run of positive `m` around `start`; `None` when it reaches an end of the profile
@@ -684,6 +743,28 @@ mod tests {
         // A red cable (rows 16-25, centre 20.5) whose lower half is in its own shade.
         let lab = table(&[(16, 20, [200, 40, 40]), (21, 25, [110, 20, 20])]);
         assert_refined_between(&lab, 21.0, 20.0, 21.0);
+    }
+
+    #[test]
+    fn a_pale_cable_s_highlight_is_read_as_part_of_it() {
+        // A dark yellow cable body (rows 20-23) lit from above: a highlight lighter than
+        // the table along its upper flank (rows 17-19), of less than half the body's
+        // contrast. The cable is rows 17-23 (centre 20), not the body alone (21.5).
+        let lab = table(&[(17, 19, [252, 252, 240]), (20, 23, [170, 150, 60])]);
+        assert_refined_between(&lab, 21.5, 19.5, 20.5);
+        // Light that is no highlight stays out: a white cable (rows 18-23) on a dark
+        // table, its soft edges grey (rows 16-17 and 24-25), lighter than the table but
+        // darker than the cable, keeps its own width.
+        let dark = table_with(|_, y| {
+            Some(match y {
+                18..=23 => [235, 235, 230],
+                16..=17 | 24..=25 => [110, 110, 108],
+                _ => [30, 30, 32],
+            })
+        });
+        let line: Vec<[f32; 2]> = (10..50).map(|x| [x as f32, 20.5]).collect();
+        let width = refine(&line, &dark, &Params::default()).width_px.unwrap();
+        assert!((5.0..7.0).contains(&width), "{width}");
     }
 
     #[test]
