@@ -10,7 +10,7 @@
 use ariadne_dlo::detect::{DetectorConfig, EndpointDetector, OnnxDetector};
 use ariadne_dlo::engine::color::LabImage;
 use ariadne_dlo::engine::graph::Graph;
-use ariadne_dlo::engine::resample::{self, Kernel};
+use ariadne_dlo::engine::resample;
 use ariadne_dlo::engine::superpixels::{SlicSettings, slic};
 use ariadne_dlo::engine::{self, MaskKind, Params, exposure, render, sharpness};
 use ariadne_dlo::pipeline;
@@ -198,12 +198,7 @@ const RESAMPLED_SIZES: [(u32, u32); 2] = [(1051, 788), (512, 384)];
 #[divan::bench(args = RESAMPLED_SIZES, sample_count = 30)]
 fn resample_640x480(bencher: divan::Bencher, size: (u32, u32)) {
     let fx = fixtures();
-    let kernel = if size.0 > 640 {
-        Kernel::CatmullRom
-    } else {
-        Kernel::Triangle
-    };
-    bencher.bench_local(|| resample::resize(&fx[0].image, size.0, size.1, kernel));
+    bencher.bench_local(|| resample::resize_to(&fx[0].image, size.0, size.1));
 }
 
 /// The sharpness reading of a development photo (sharp: it pays the reading alone).

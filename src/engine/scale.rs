@@ -16,7 +16,7 @@ use std::cmp::Ordering;
 use image::RgbImage;
 
 use super::geometry::{border_inset, dist, points_near_any, polyline_length};
-use super::resample::{Kernel, box_shrink, resize};
+use super::resample::{box_shrink, resize_to};
 use super::{CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
@@ -180,12 +180,7 @@ impl WorkingFrame {
         } else if 2 * w <= self.photo[0] && 2 * h <= self.photo[1] {
             Cow::Owned(box_shrink(photo, w, h))
         } else {
-            let kernel = if self.enlarges() {
-                Kernel::CatmullRom
-            } else {
-                Kernel::Triangle
-            };
-            Cow::Owned(resize(photo, w, h, kernel))
+            Cow::Owned(resize_to(photo, w, h))
         }
     }
 }

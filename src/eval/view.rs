@@ -5,7 +5,7 @@
 
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
-use crate::engine::resample::{self, Kernel};
+use crate::engine::resample;
 use crate::synth::Rng;
 
 use super::dataset::{BORDER_TOLERANCE_PX, DatasetError, Sample, terminal_ends};
@@ -97,12 +97,7 @@ impl View {
         let (fx, fy) = (size.0 as f64 / cw as f64, size.1 as f64 / ch as f64);
         let photo = image::load_from_memory(&bytes).map_err(|e| image_err(e.to_string()))?;
         let photo = imageops::crop_imm(&photo.into_rgb8(), x0, y0, cw, ch).to_image();
-        let kernel = if fx > 1.0 {
-            Kernel::CatmullRom
-        } else {
-            Kernel::Triangle
-        };
-        let mut resized = resample::resize(&photo, size.0, size.1, kernel);
+        let mut resized = resample::resize_to(&photo, size.0, size.1);
         if camera.exposure != 1.0 {
             for v in resized.iter_mut() {
                 *v = (f64::from(*v) * camera.exposure).round().min(255.0) as u8;
