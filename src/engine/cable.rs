@@ -223,8 +223,17 @@ pub(super) fn fit_refined(
     let mut polyline = spline.sample(params.polyline_step_px);
     let (mut width, mut ridge_share) = (None, None);
     if params.refine {
+        let mut lit_read: Option<usize> = None;
         for _ in 0..params.refine_passes {
             let refined = refine::refine(&polyline, lab, params);
+            // Moved off its shadow onto a pale cable of nearly the table's colour, a
+            // line that the next pass reads at under half as many profiles is kept:
+            // few profiles there tell the cable from the table, and offsets spread
+            // from those few would undo the move.
+            if lit_read.is_some_and(|n| refined.read < n.div_ceil(2)) {
+                break;
+            }
+            lit_read = refined.lit_side.then_some(refined.read);
             width = refined.width_px.or(width);
             ridge_share = refined.ridge_share.or(ridge_share);
             let mut pts = refined.points;

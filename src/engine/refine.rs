@@ -11,7 +11,9 @@
 //! centreline onto itself. The run's shadowed flanks, nearer the background's colour
 //! than the cable's, are cut off; a run that is all shadow gives way to the lighter run
 //! beside it, when the shadows read along the cable fall one way in the image, as one
-//! light casts them.
+//! light casts them; where most profiles find such a lighter run, a darker run with
+//! none beside it is a stretch of the same shadow too coloured to read as one, and is
+//! left out.
 //! Profiles that cannot be read (a crossing, the frame, a cable of the background's
 //! colour) are skipped; offsets are median- then mean-filtered along the curve so one
 //! bad profile cannot bend it.
@@ -33,6 +35,11 @@ pub struct Refined {
     /// differs from both; [`step_not_ridge`]); `None` when fewer than three show
     /// anything.
     pub ridge_share: Option<f32>,
+    /// The cable was read as the lighter runs beside its shadows (a pale cable whose
+    /// shadow shows more contrast than it does; `lit_beside_shadow`).
+    pub lit_side: bool,
+    /// How many profiles were read (gave a centre and a width).
+    pub read: usize,
 }
 
 /// Bilinear Lab sample at (x, y); `None` outside the image.
@@ -112,6 +119,8 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
             points: line.to_vec(),
             width_px: None,
             ridge_share: None,
+            lit_side: false,
+            read: 0,
         };
     };
     let radius = params.refine_radius_px;
@@ -146,10 +155,19 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         }
     }
     let trust_lit = shadows_agree(&readings, &normal);
+    let lit_count = readings.iter().filter(|(_, r)| r.lit.is_some()).count();
+    let mostly_lit = trust_lit && 2 * lit_count >= readings.len();
     let mut offsets: Vec<(usize, f32)> = Vec::with_capacity(readings.len());
     let mut widths = Vec::with_capacity(readings.len());
     for (i, reading) in readings {
-        let (centre, width) = reading.lit.filter(|_| trust_lit).unwrap_or(reading.plain);
+        // Where the cable's shadows agree, a darker run with no lit one beside it is its
+        // shadow too (its colour, blended with the cable's, too far from grey to read
+        // as one), not the cable: left out.
+        let (centre, width) = match (trust_lit, reading.lit) {
+            (true, Some(lit)) => lit,
+            (true, None) if reading.darker && mostly_lit => continue,
+            _ => reading.plain,
+        };
         offsets.push((i, centre));
         widths.push(width);
     }
@@ -159,11 +177,14 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         None
     };
     let ridge_share = (shown >= 3).then(|| 1.0 - steps_seen as f32 / shown as f32);
-    if offsets.len() < 3 {
+    let read = offsets.len();
+    if read < 3 {
         return Refined {
             points: line.to_vec(),
             width_px,
             ridge_share,
+            lit_side: false,
+            read,
         };
     }
     let smooth = smooth_offsets(&offsets, line.len(), radius * 0.5);
@@ -177,6 +198,8 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
         points,
         width_px,
         ridge_share,
+        lit_side: mostly_lit,
+        read,
     }
 }
 
@@ -226,6 +249,8 @@ struct Reading {
     plain: Across,
     /// When that run is a cast shadow, the lighter run beside it ([`lit_beside_shadow`]).
     lit: Option<Across>,
+    /// That run is darker than the background (its mean lightness).
+    darker: bool,
 }
 
 /// Finds the cable across one profile (its [`Contrast`]), or `None` when the profile
@@ -260,6 +285,8 @@ fn read_profile(
     let (lo, hi) = across_highlights(profile, &m, &fg, run_around(&m, start)?, min_de);
     let (lo, hi) = across_outline(profile, &m, (lo, hi), centre, settings);
     let across = |(m, lo, hi): (Vec<f32>, usize, usize)| edges(&m, lo, hi, centre, settings);
+    let (dl, dab) = run_against_background(profile, [left_bg, right_bg], [lo, hi]);
+    let darker = dl < 0.0 && dab <= -dl;
     Some(Reading {
         plain: across(with_bordering_highlights(
             profile,
@@ -270,6 +297,7 @@ fn read_profile(
         ))?,
         lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
             .and_then(across),
+        darker,
     })
 }
 
@@ -295,6 +323,19 @@ fn against_background(s: [f32; 3], bg: [[f32; 3]; 2]) -> (f32, f32) {
         bg[1]
     };
     (s[0] - b[0], (s[1] - b[1]).hypot(s[2] - b[2]))
+}
+
+/// The mean of [`against_background`] over the run `lo..=hi` of `profile`.
+fn run_against_background(
+    profile: &[[f32; 3]],
+    bg: [[f32; 3]; 2],
+    [lo, hi]: [usize; 2],
+) -> (f32, f32) {
+    let n = (hi - lo + 1) as f32;
+    profile[lo..=hi]
+        .iter()
+        .map(|&s| against_background(s, bg))
+        .fold((0.0, 0.0), |(l, c), (dl, dc)| (l + dl / n, c + dc / n))
 }
 
 /// Whether a sample looks like a cast shadow: darker than the background by lightness
@@ -540,11 +581,7 @@ fn lit_beside_shadow(
     min_de: f32,
 ) -> Option<(Vec<f32>, usize, usize)> {
     let delta = |s: [f32; 3]| against_background(s, bg);
-    let n = (hi - lo + 1) as f32;
-    let (dl, dab) = profile[lo..=hi]
-        .iter()
-        .map(|&s| delta(s))
-        .fold((0.0, 0.0), |(l, c), (dl, dc)| (l + dl / n, c + dc / n));
+    let (dl, dab) = run_against_background(profile, bg, [lo, hi]);
     if dl >= 0.0 || dab > SHADOW_CHROMA * -dl {
         return None;
     }
@@ -732,6 +769,22 @@ mod tests {
         assert_refined_between(&table(&[(22, 28, [120, 130, 122])]), 24.0, 24.5, 25.5);
         let lab = table(&[(17, 20, [240, 248, 240]), (22, 28, [40, 60, 160])]);
         assert_refined_between(&lab, 24.0, 24.5, 25.5);
+    }
+
+    #[test]
+    fn a_pale_cable_whose_shadow_is_tinted_in_places_is_read_off_it_throughout() {
+        // The cable and shadow of the test above, but along half the cable the shadow
+        // takes a brown tint (a blend with the cable, reflected light): too coloured
+        // to read as a cast shadow there, it has no lit run beside it. The lit runs
+        // elsewhere say the cable is the pale one: the tinted stretches are its shadow
+        // too, and the whole line moves off it.
+        let lab = table_with(|x, y| match y {
+            17..=20 => Some([240, 248, 240]),
+            22..=28 if x % 8 >= 4 => Some([150, 130, 100]),
+            22..=28 => Some([120, 130, 122]),
+            _ => None,
+        });
+        assert_refined_between(&lab, 23.0, 17.5, 19.5);
     }
 
     #[test]
