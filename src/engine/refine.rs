@@ -160,9 +160,9 @@ pub fn refine(line: &[[f32; 2]], lab: &LabImage, params: &Params) -> Refined {
     let mut offsets: Vec<(usize, f32)> = Vec::with_capacity(readings.len());
     let mut widths = Vec::with_capacity(readings.len());
     for (i, reading) in readings {
-        // Where the cable's shadows agree, a darker run with no lit one beside it is its
-        // shadow too (its colour, blended with the cable's, too far from grey to read
-        // as one), not the cable: left out.
+        // Where the cable's shadows agree and most of its profiles found a lit run, a
+        // darker run with none beside it is its shadow too (its colour, blended with
+        // the cable's, too far from grey to read as one), not the cable: left out.
         let (centre, width) = match (trust_lit, reading.lit) {
             (true, Some(lit)) => lit,
             (true, None) if reading.darker && mostly_lit => continue,
@@ -249,7 +249,9 @@ struct Reading {
     plain: Across,
     /// When that run is a cast shadow, the lighter run beside it ([`lit_beside_shadow`]).
     lit: Option<Across>,
-    /// That run is darker than the background (its mean lightness).
+    /// That run is darker than the background by more lightness than colour (its
+    /// mean a*b* difference within its mean lightness drop): a shadow, tinted or not,
+    /// or a grey or black cable; not a coloured cable's own shade.
     darker: bool,
 }
 
