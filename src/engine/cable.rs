@@ -335,3 +335,48 @@ pub(super) fn straight(id: usize, ends: [[f32; 2]; 2], end_indices: [Option<usiz
         score: 0.5,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pale_cable_read_off_its_shadow_is_not_moved_again_by_a_few_profiles() {
+        // A pale cable (rows 17-20, centre 18.5) of nearly the card's colour (ΔE 8.9,
+        // under `refine_min_background_de`) and its grey shadow below it (rows 22-28),
+        // of far more contrast; along a quarter of it a darker stain on the card above
+        // (rows 6-10). The first pass reads the shadow, takes the lit cable beside it
+        // and moves the line onto the cable (19 profiles read); centred there, the
+        // second pass can read only the 5 profiles that end on the stain, and its
+        // offsets, interpolated from those few, carried the whole line off the cable
+        // (to row 15.7) before the second pass was refused.
+        let (w, h) = (80, 40);
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| match (i % w, i / w) {
+                (_, 17..=20) => [218, 238, 230],
+                (_, 22..=28) => [120, 130, 122],
+                (26..=45, 6..=10) => [90, 110, 160],
+                _ => [190, 214, 208],
+            })
+            .collect();
+        let lab = LabImage::from_rgb(&rgb, w, h);
+        let params = Params {
+            refine_radius_px: 10.0,
+            ..Params::default()
+        };
+        let points: Vec<[f32; 2]> = (5..75).map(|x| [x as f32, 23.0]).collect();
+        let fitted = fit_refined(
+            &points,
+            &vec![1.0; points.len()],
+            [None, None],
+            &lab,
+            &params,
+        )
+        .expect("a spline");
+        let rows: Vec<f32> = fitted.polyline.iter().map(|p| p[1]).collect();
+        let (lo, hi) = rows
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(lo, hi), &y| (lo.min(y), hi.max(y)));
+        assert!(lo > 17.0 && hi < 20.5, "rows {lo}..{hi}");
+    }
+}
