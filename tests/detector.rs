@@ -179,7 +179,7 @@ fn a_soft_photo_is_segmented_like_a_sharp_one() {
 
 /// A noisy photo (Gaussian noise of σ 12 levels on every channel: a small sensor at
 /// high gain) from a photo alone is segmented about as well as the clean one: measured
-/// 0.711 / 0.635 (simple / hard) against 0.715 / 0.745 (`ariadne eval --endpoints
+/// 0.712 / 0.635 (simple / hard) against 0.716 / 0.745 (`ariadne eval --endpoints
 /// detect --noise 12`; the three `hard` photos move by single cables). The floors are
 /// those of the photos as they are.
 #[test]

@@ -297,8 +297,14 @@ fn read_profile(
             without_shadowed_flanks(profile, [left_bg, right_bg], cable, (m, lo, hi)),
             min_de,
         ))?,
-        lit: lit_beside_shadow(profile, [left_bg, right_bg], &fg, [lo, hi], min_de)
-            .and_then(across),
+        lit: lit_beside_shadow(
+            profile,
+            [left_bg, right_bg],
+            &fg,
+            ([lo, hi], (dl, dab)),
+            min_de,
+        )
+        .and_then(across),
         darker,
     })
 }
@@ -573,17 +579,17 @@ const LIT_SHARE: f32 = 0.75;
 /// When the run `lo..=hi` of the profile is a cast shadow (darker than the background,
 /// hardly another colour) and a run lighter than the background lies beside it, that
 /// lighter run: a pale cable on a pale table casts a shadow of more contrast than its
-/// own, which a reading by contrast alone takes for the cable. Returns the lighter
-/// run's half-maximum margins (as `m` in [`read_profile`]) and its bounds.
+/// own, which a reading by contrast alone takes for the cable. `(dl, dab)` is the run
+/// against the background ([`run_against_background`]). Returns the lighter run's
+/// half-maximum margins (as `m` in [`read_profile`]) and its bounds.
 fn lit_beside_shadow(
     profile: &[[f32; 3]],
     bg: [[f32; 3]; 2],
     fg: &[f32],
-    [lo, hi]: [usize; 2],
+    ([lo, hi], (dl, dab)): ([usize; 2], (f32, f32)),
     min_de: f32,
 ) -> Option<(Vec<f32>, usize, usize)> {
     let delta = |s: [f32; 3]| against_background(s, bg);
-    let (dl, dab) = run_against_background(profile, bg, [lo, hi]);
     if dl >= 0.0 || dab > SHADOW_CHROMA * -dl {
         return None;
     }
