@@ -256,6 +256,11 @@ pub struct EvalArgs {
     /// [0, 50].
     #[arg(long, default_value_t = 0.0)]
     pub noise: f64,
+    /// Write every photo, as the engine is given it (made by the flags above, or the
+    /// file itself), into this folder as `SET_NAME_xSCALE_zZOOM.png` (`.jpg` for an
+    /// unchanged JPEG): to look at, or to segment again with `ariadne segment`.
+    #[arg(long)]
+    pub save_views: Option<PathBuf>,
     /// The endpoint detector, used with --endpoints detect.
     #[command(flatten)]
     pub detector: DetectorArgs,

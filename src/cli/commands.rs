@@ -143,6 +143,7 @@ pub fn evaluate(args: EvalArgs) -> Result<(), CliError> {
                 blur: args.blur,
                 noise: args.noise,
             },
+            save_views: args.save_views.as_deref(),
         };
         let results = eval::evaluate_all(&samples, &simple, &hard, setup, print)?;
         scales.push((scale, eval::summarise(&results)));

@@ -11,6 +11,8 @@ pub use metrics::{
 };
 pub use view::{Camera, View};
 
+use std::path::Path;
+
 use image::GrayImage;
 use serde::Serialize;
 
@@ -90,6 +92,8 @@ pub struct Setup<'a> {
     pub ends: EndsFrom,
     /// The camera the photos are made for (the default reads the files as they are).
     pub camera: Camera,
+    /// A folder to write every photo into as the engine is given it ([`View::save`]).
+    pub save_views: Option<&'a Path>,
 }
 
 /// Segments `sample` with the pipeline as `setup` says, and scores it.
@@ -99,6 +103,9 @@ pub fn evaluate_sample(
     setup: Setup<'_>,
 ) -> Result<ImageResult, DatasetError> {
     let view = View::of(sample, setup.camera)?;
+    if let Some(dir) = setup.save_views {
+        view.save(dir, sample, setup.camera)?;
+    }
     let (w, h) = view.size;
     let terminals = &view.terminals;
     let out = pipeline::run(&pipeline::Job {

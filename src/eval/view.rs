@@ -3,6 +3,8 @@
 //! cropped and enlarged back to the frame's size, so cables look wider), or darker (an
 //! underexposed photo), or softer (a lens out of focus).
 
+use std::path::{Path, PathBuf};
+
 use image::{GrayImage, ImageFormat, Luma, imageops};
 
 use crate::engine::resample;
@@ -163,6 +165,30 @@ impl View {
     }
 }
 
+impl View {
+    /// Writes the photo as evaluated into `dir` (created if missing), named after
+    /// `sample` and `camera` (`SET_NAME_xSCALE_zZOOM`, with the extension of its
+    /// format: the file itself for the default camera, else PNG), and returns the path.
+    pub fn save(
+        &self,
+        dir: &Path,
+        sample: &Sample,
+        camera: Camera,
+    ) -> Result<PathBuf, DatasetError> {
+        std::fs::create_dir_all(dir).map_err(|e| DatasetError::io(dir, e))?;
+        let extension = image::guess_format(&self.bytes)
+            .ok()
+            .and_then(|f| f.extensions_str().first().copied())
+            .unwrap_or("img");
+        let path = dir.join(format!(
+            "{}_{}_x{}_z{}.{extension}",
+            sample.set, sample.name, camera.scale, camera.zoom
+        ));
+        std::fs::write(&path, &self.bytes).map_err(|e| DatasetError::io(&path, e))?;
+        Ok(path)
+    }
+}
+
 /// A seed of `sample`'s set and name (FNV-1a), so that each photo gets its own noise,
 /// the same on every run and machine.
 fn seed(sample: &Sample) -> u64 {
@@ -207,5 +233,32 @@ mod tests {
             / n;
         assert!((mean - 128.0).abs() < 0.3, "mean {mean}");
         assert!((var.sqrt() - 10.0).abs() < 0.3, "σ {}", var.sqrt());
+    }
+
+    #[test]
+    fn a_saved_view_is_the_photo_the_engine_is_given() {
+        let samples = super::super::load_dataset(&super::super::default_dataset_dir())
+            .expect("dataset (set ARIADNE_DATASET)");
+        let sample = &samples[0];
+        let dir = std::env::temp_dir().join(format!("ariadne-views-{}", std::process::id()));
+        let camera = Camera {
+            scale: 0.5,
+            ..Camera::default()
+        };
+        let view = View::of(sample, camera).unwrap();
+        let path = view.save(&dir, sample, camera).unwrap();
+        assert!(path.ends_with(format!("{}_{}_x0.5_z1.png", sample.set, sample.name)));
+        assert_eq!(std::fs::read(&path).unwrap(), view.bytes);
+        let saved = image::open(&path).unwrap();
+        assert_eq!((saved.width(), saved.height()), view.size);
+        // The default camera's view is the file itself, saved with its own extension.
+        let original = View::of(sample, Camera::default()).unwrap();
+        let path = original.save(&dir, sample, Camera::default()).unwrap();
+        assert_eq!(path.extension().unwrap(), "jpg");
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            std::fs::read(&sample.image).unwrap()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -103,6 +103,7 @@ pub fn assert_split_iou_with(
         network,
         ends,
         camera,
+        save_views: None,
     };
     let results = eval::evaluate_all(&samples, &simple, &hard, setup, |_| {}).unwrap();
     let simple_iou = eval::weighted_iou(&results, "simple");
