@@ -163,9 +163,7 @@ impl View {
             centrelines,
         })
     }
-}
 
-impl View {
     /// Writes the photo as evaluated into `dir` (created if missing), named after
     /// `sample` and `camera` (`SET_NAME_xSCALE_zZOOM`, with the extension of its
     /// format: the file itself for the default camera, else PNG), and returns the path.
