@@ -165,6 +165,7 @@ fn manifests_match_the_code() {
     let tmp = std::env::temp_dir().join(format!("ariadne-presets-{}.json", std::process::id()));
     std::fs::write(&tmp, text).unwrap();
     let presets = Presets::load(Some(&tmp)).unwrap();
+    std::fs::remove_file(&tmp).unwrap();
     assert!(
         presets.names().len() > 2,
         "cells' presets beside the built-in ones"

@@ -440,4 +440,5 @@ fn bad_model_or_runtime_stops_the_service_at_start_up() {
             "{flags:?}: {stderr}"
         );
     }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

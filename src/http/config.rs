@@ -200,5 +200,6 @@ mod tests {
             Presets::load(Some(&file)),
             Err(PresetsError::Json(..))
         ));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
