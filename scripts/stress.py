@@ -15,6 +15,23 @@ folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its o
     training/.venv/bin/python scripts/stress.py /tmp/stress
     target/release/ariadne eval --dataset /tmp/stress --endpoints detect
 
+With `--photos DIR`, a last kind, `photo`, draws the `textured` kind's cables on crops
+of the photographs in DIR (any size, grey ones tinted): surfaces photographed, not
+drawn, that neither the network nor this script's textures were made from: two crops
+of each photograph, after every other kind (whose scenes stay as without it). Twelve
+that scikit-image ships (brick, grass, gravel, the moon, coins, a stained tissue, a
+printed page, handwriting, a photographer on a lawn, a café table, a garage, the deep
+sky) come offline from PyPI:
+
+    pip download --no-deps scikit-image -d /tmp/wheel
+    unzip -o /tmp/wheel/scikit_image-*.whl 'skimage/data/*' -d /tmp/wheel
+    mkdir -p /tmp/photos
+    for f in brick grass gravel moon coins ihc page text camera coffee \
+        motorcycle_left hubble_deep_field; do cp /tmp/wheel/skimage/data/$f.* /tmp/photos; done
+    training/.venv/bin/python scripts/stress.py /tmp/stress --photos /tmp/photos
+
+`photo-backgrounds.tsv` in the output folder names each `photo` scene's source.
+
 Each photo has `NNNNN.jpg` (quality 90), its centrelines `NNNNN.txt` and 7 px masks
 `NNNNN_mask_K.png` / `NNNNN_mask_all.png`, as the cables dataset (its README); a rod's
 mask is as wide as the rod. Seeded:
@@ -219,6 +236,22 @@ def textured_background(rng):
     return Image.fromarray(np.clip(img, 0, 255).astype(np.uint8))
 
 
+def photo_background(rng, path):
+    """A random crop of the photograph at `path`, enlarged 1-1.3x beyond covering the
+    frame; a grey photograph tinted, under the same sensor noise as `background`."""
+    photo = Image.open(path)
+    grey = photo.mode in ("L", "LA", "I", "I;16")
+    photo = photo.convert("RGB")
+    scale = max(W / photo.width, H / photo.height) * rng.uniform(1.0, 1.3)
+    size = (math.ceil(photo.width * scale), math.ceil(photo.height * scale))
+    photo = photo.resize(size, Image.BICUBIC)
+    x0, y0 = rng.integers(0, size[0] - W + 1), rng.integers(0, size[1] - H + 1)
+    img = np.asarray(photo.crop((x0, y0, x0 + W, y0 + H)), float)
+    if grey:
+        img = img * rng.uniform(0.6, 1.15, 3)
+    return Image.fromarray(np.clip(img + rng.normal(0.0, 2.0, img.shape), 0, 255).astype(np.uint8))
+
+
 def cast_shadows(img, paths, widths, rng):
     """Darkens `img` under each path moved 2-4 px down and right, blurred: the soft
     shadow a cable casts on a flat surface lit from above and to one side."""
@@ -340,10 +373,10 @@ def scene(rng, kind):
     return img.filter(ImageFilter.GaussianBlur(0.7)), lines
 
 
-def textured_scene(rng):
+def textured_scene(rng, photo=None):
     """A `textured` photo: 2-5 cables 7-11 px wide, each casting a soft shadow, on one of
-    `TEXTURES`."""
-    img = textured_background(rng)
+    `TEXTURES`, or on a crop of the photograph at `photo`."""
+    img = textured_background(rng) if photo is None else photo_background(rng, photo)
     paths = [any_cable(rng) for _ in range(int(rng.integers(2, 6)))]
     widths = [rng.uniform(7.0, 11.0) for _ in paths]
     img = cast_shadows(img, paths, widths, rng)
@@ -366,14 +399,26 @@ def main():
     ap.add_argument("out", type=Path)
     ap.add_argument("--per-kind", type=int, default=12, help="photos per background kind")
     ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--photos", type=Path,
+                    help="a folder of photographs: adds the `photo` kind, cables on them")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
-    for kind in KINDS:
+    photos = []
+    if args.photos:
+        photos = sorted(p for p in args.photos.iterdir()
+                        if p.suffix.lower() in (".png", ".jpg", ".jpeg"))
+    sources = []
+    for kind in KINDS + (["photo"] if photos else []):
         folder = args.out / kind
         folder.mkdir(parents=True, exist_ok=True)
-        for i in range(args.per_kind):
-            img, lines = scene(rng, kind)
+        for i in range(2 * len(photos) if kind == "photo" else args.per_kind):
             name = f"{i:05d}"
+            if kind == "photo":
+                source = photos[i // 2]
+                sources.append(f"{name}\t{source.name}\n")
+                img, lines = textured_scene(rng, source)
+            else:
+                img, lines = scene(rng, kind)
             img.save(folder / f"{name}.jpg", quality=90)
             with open(folder / f"{name}.txt", "w") as f:
                 for path, _ in lines:
@@ -384,7 +429,9 @@ def main():
             mask(lines).save(folder / f"{name}_mask_all.png")
             for k, line in enumerate(lines):
                 mask([line]).save(folder / f"{name}_mask_{k}.png")
-    print(f"{len(KINDS) * args.per_kind} photos under {args.out}")
+    if sources:
+        (args.out / "photo-backgrounds.tsv").write_text("".join(sources))
+    print(f"{len(KINDS) * args.per_kind + 2 * len(photos)} photos under {args.out}")
 
 
 if __name__ == "__main__":

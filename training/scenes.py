@@ -129,6 +129,12 @@ CAMOUFLAGE = 0.0
 # metal), as switchgear wiring does: train_field.py's `--sleeves`.
 SLEEVES = 0.0
 
+# Share of procedural backgrounds drawn with lines that are not cables: masonry and
+# tiles whose joints are as wide as a cable, or handwriting (train_field.py's
+# `--line-textures`). Their lines are straight and periodic, with T-junctions, or short,
+# soft and tightly curved; a cable is none of these.
+LINE_TEXTURES = 0.0
+
 
 def option_drawn(rng: random.Random, share: float) -> bool:
     """True with probability `share`, for an option that is off by default: at 0 it
@@ -144,7 +150,7 @@ def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
              "clutter", "clutter"]
     if RICH_TEXTURES:
         kinds += ["mosaic", "mosaic", "drips", "drips"]
-    kind = rng.choice(kinds)
+    kind = "lines" if option_drawn(rng, LINE_TEXTURES) else rng.choice(kinds)
     base = random_colour(rng) if base is None else base
     img = np.ones((h, w, 3), np.float32) * base
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -196,12 +202,69 @@ def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
             d.line([tuple(p) for p in pts], fill=tuple(int(v) for v in random_colour(rng)),
                    width=rng.randrange(1, 3))
         img = np.asarray(pil, np.float32)
+    elif kind == "lines":
+        img = masonry(rng, nrng, base) if rng.random() < 0.6 else handwriting(rng, nrng, img)
     if kind == "clutter" or rng.random() < 0.25:
         img = clutter(rng, img)
     if rng.random() < 0.35:  # shadows and uneven light
         light = 1 + smooth_noise(nrng, h, w, rng.uniform(40, 160)) * rng.uniform(0.1, 0.5)
         img = img * light[..., None]
     return np.clip(img, 0, 255)
+
+
+def masonry(rng: random.Random, nrng: np.random.Generator, base: np.ndarray,
+            h=IN_H, w=IN_W) -> np.ndarray:
+    """Bricks in running bond, or square tiles, at any angle, each a little lighter or
+    darker than `base`, with joints 1-4 px wide (2-8 photo px: a cable's width) of
+    another colour."""
+    a = rng.uniform(0, math.pi)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    u = xx * math.cos(a) + yy * math.sin(a) + rng.uniform(0, 100)
+    v = -xx * math.sin(a) + yy * math.cos(a) + rng.uniform(0, 100)
+    course = rng.uniform(6, 30)
+    tiles = rng.random() < 0.3
+    length = course if tiles else min(90.0, course * rng.uniform(2, 4))
+    joint = rng.uniform(1.0, 4.0)
+    row = np.floor(v / course)
+    shifted = u + (0 if tiles else (row % 2) * length / 2)
+    col = np.floor(shifted / length)
+    shade = nrng.uniform(0.85, 1.15, 997).astype(np.float32)
+    brick = shade[((row * 31 + col * 17) % 997).astype(np.int64)]
+    img = base * brick[..., None]
+    on = (v - row * course < joint) | (shifted - col * length < joint)
+    mortar = rng.choice([base * rng.uniform(0.3, 0.7), base * 0.4 + 255 * 0.6,
+                         random_colour(rng)])
+    img[on] = mortar
+    return img + nrng.normal(0, 4, (h, w, 1)).astype(np.float32)
+
+
+def handwriting(rng: random.Random, nrng: np.random.Generator, img: np.ndarray
+                ) -> np.ndarray:
+    """Rows of handwriting at any angle: short, tightly curved strokes 1-3 px wide in
+    one ink, softened by a blur."""
+    h, w = img.shape[:2]
+    ink = Image.new("L", (w, h), 0)
+    d = ImageDraw.Draw(ink)
+    a = rng.uniform(0, math.pi)
+    rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    pitch, size = rng.uniform(12, 40), rng.uniform(4, 12)
+    span = math.hypot(w, h)
+    for r in np.arange(-span / 2, span / 2, pitch):
+        x = -span / 2 + rng.uniform(0, pitch)
+        while x < span / 2:
+            if rng.random() < 0.6:  # a word: a few strokes that turn sharply
+                heading = rng.uniform(0, 2 * math.pi)
+                turns = nrng.normal(0, 1.2, rng.randrange(3, 9)).cumsum() + heading
+                steps = size * 0.6 * np.stack([np.cos(turns), np.sin(turns)], 1)
+                pts = np.array([x, r]) + np.vstack([[0, 0], steps.cumsum(0)])
+                pts = pts @ rot.T + (w / 2, h / 2)
+                d.line([tuple(p) for p in pts], fill=255, width=rng.randrange(1, 4))
+            x += size * rng.uniform(1, 3)
+    alpha = np.asarray(ink.filter(ImageFilter.GaussianBlur(rng.uniform(0.3, 1.2))),
+                       np.float32)[..., None] / 255
+    colour = rng.choice([np.array([20, 20, 30]), np.array([20, 40, 140]),
+                         random_colour(rng)])
+    return img * (1 - alpha) + colour * alpha
 
 
 def clutter(rng: random.Random, img: np.ndarray) -> np.ndarray:

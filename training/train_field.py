@@ -270,6 +270,9 @@ def main():
     ap.add_argument("--sleeves", type=float, default=0.0,
                     help="chance that a procedural cable's end wears an insulated sleeve "
                          "(ferrule or crimp barrel) of its own colour")
+    ap.add_argument("--line-textures", type=float, default=0.0,
+                    help="share of procedural backgrounds drawn with lines that are not "
+                         "cables (masonry, tiles, handwriting)")
     ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--end-weight", type=float, default=1.0,
                     help="weight of the terminal heatmap's loss against the rest")
@@ -286,6 +289,7 @@ def main():
     scenes.RICH_TEXTURES = args.rich_textures
     scenes.CAMOUFLAGE = args.camouflage
     scenes.SLEEVES = args.sleeves
+    scenes.LINE_TEXTURES = args.line_textures
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     np.random.seed(args.seed)
