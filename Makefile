@@ -41,7 +41,7 @@ stress: setup
 # about 15-20 minutes each on 2 cores), then score each on its held-out photos.
 lobo: setup
 	for g in white wood blue hard; do \
-	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 2000 --holdout $$g --out out/field-$$g.onnx; \
+	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --holdout $$g --out out/field-$$g.onnx; \
 	done
 	cargo build --release
 	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints detect
@@ -49,11 +49,11 @@ lobo: setup
 
 # The bundled model (about 15-20 minutes on 2 cores); see models/README.md.
 train-field:
-	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --steps 2000 --out models/cable_field.onnx
+	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --out models/cable_field.onnx
 
 # The training scenes are still those the bundled model saw (models/README.md).
 scene-check:
-	test "$$(training/.venv/bin/python training/train_field.py --scene-hash 4 | tail -1)" = "scenes e558852d9fd235a876ad5551ce8b4de9"
+	test "$$(training/.venv/bin/python training/train_field.py --line-textures 0.15 --scene-hash 4 | tail -1)" = "scenes b026b36c43e56f06f5928470d2978caf"
 
 # hadolint, kubernetes-validate --strict, kubectl kustomize (offline checks).
 deploy-check:

@@ -14,7 +14,7 @@
 use super::cable::{Cable, Scene, model_cable, model_course};
 use super::chains::{chain, extend};
 use super::field::CableField;
-use super::geometry::{along_one_side, dist3, median, runs_along};
+use super::geometry::{along_one_side, dist3, median, points_near_any, runs_along};
 use super::graph::Graph;
 use super::orphans::orphan_seeds;
 use super::pairing::{self, Floor, Pairing};
@@ -37,11 +37,13 @@ pub(super) fn perimeter(w: usize, h: usize) -> Vec<[usize; 2]> {
 /// whose ends were missed: walks from border seeds where the border shows a colour the
 /// cables in `chosen` do not explain, kept when they reach another border point (see
 /// [`border`]); then walks from the ends of the pieces of the field that still no
-/// cable explains, kept when they reach the border or another such seed. Their ends
-/// belong to no given end.
+/// cable explains, kept when they reach the border or another such seed and do not
+/// repeat a cable found before them (one of `ended`, the cables of `chosen`, or one
+/// from the border). Their ends belong to no given end.
 pub(super) fn border_crossing_cables(
     scene: &Scene<'_>,
     chosen: &[Pairing],
+    ended: &[Cable],
 ) -> Result<Vec<Cable>, EngineError> {
     let Scene {
         walks,
@@ -65,18 +67,32 @@ pub(super) fn border_crossing_cables(
         let seeds = orphan_seeds(graph, vertex_field, &covered, frame, p);
         let orphans = cables_from(scene, (&seeds, seeds.len()), &covered, min_score, true)?;
         // A pale cable can be walked a superpixel beside it, leaving pieces of field
-        // along it that its walk does not cover: a cable over them repeats it.
+        // along it that its walk does not cover: a cable over them repeats it. So can
+        // a cable between two ends (the synthetic `Loop`: the walk ran along the outer
+        // side of its wide bends); as a piece of field there may lead on to a cable
+        // of its own, such a repeat must lie all but wholly on those cables.
+        let half_width = |f: &Cable| 0.5 * f.width_px.max(p.nominal_width_px);
+        let ended_lines: Vec<(&[[f32; 2]], f32)> = ended
+            .iter()
+            .map(|f| (&f.polyline[..], half_width(f)))
+            .collect();
         let repeats = |c: &Cable| {
-            found.cables.iter().any(|f| {
-                let tolerance = 0.5 * f.width_px.max(p.nominal_width_px);
-                runs_along(&c.polyline, &f.polyline, tolerance)
-            })
+            found
+                .cables
+                .iter()
+                .any(|f| runs_along(&c.polyline, &f.polyline, half_width(f)))
+                || points_near_any(&c.polyline, &ended_lines) as f32
+                    >= ENDED_REPEAT_SHARE * c.polyline.len() as f32
         };
         let new: Vec<Cable> = orphans.cables.into_iter().filter(|c| !repeats(c)).collect();
         found.cables.extend(new);
     }
     Ok(found.cables)
 }
+
+/// Least share of a cable walked from the field's pieces that must lie on cables
+/// between ends for it to repeat them.
+const ENDED_REPEAT_SHARE: f32 = 0.9;
 
 /// Marks the superpixels of the `chosen` walks, and their neighbours, as `covered`.
 fn cover(covered: &mut [bool], graph: &Graph, walks: &[Walk], chosen: &[Pairing]) {

@@ -307,7 +307,7 @@ pub fn segment_oversegmented(
     if params.border_cables {
         let t = Instant::now();
         deadline.check()?;
-        let found = border::border_crossing_cables(&scene, &chosen)?;
+        let found = border::border_crossing_cables(&scene, &chosen, &cables)?;
         for mut cable in found {
             cable.id = cables.len();
             cables.push(cable);
