@@ -153,9 +153,10 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     // among signal wires): the first pass's cables that this scale does not suit, that
     // start at an end this pass left without a cable, or that have no end (enlarged:
     // two thin wires side by side whose gap widens; shrunk: a pale cable across the
-    // frame, blurred into its board), are taken in. Shrunk for
-    // wide cables, the masks keep the first pass's width: the thin cables set the
-    // scene's scale, the wide ones are wide cables.
+    // frame, blurred into its board), are taken in, and a wire this scale made too
+    // thin to follow gives way to the first pass's. Where a shrunk pass lost cables
+    // (not merely walked one astray), the masks keep the first pass's width: the thin
+    // cables set the scene's scale, the wide ones are wide cables.
     let mut mixed_mask_scale = None;
     if let Some(next) = corrected {
         let shrinks = next < k;

@@ -17,7 +17,7 @@ use image::RgbImage;
 
 use super::geometry::{border_inset, dist, points_near_any, polyline_length};
 use super::resample::{box_shrink, resize_to};
-use super::{CableField, MIN_SIDE, Params, Segmentation};
+use super::{Cable, CableField, MIN_SIDE, Params, Segmentation};
 
 /// Smallest and largest factor on the working scale that a closer or a farther
 /// camera gets (a photo segmented at most 4 times smaller or 2 times larger).
@@ -297,7 +297,15 @@ impl Segmentation {
     /// in both passes), unless a cable of this pass ends there already, and then the
     /// cable is not taken; a detected end of `earlier` with no such match is appended to
     /// `points` and `confidences` (this pass's ends, aligned with `end_cables`).
-    /// Returns how many cables were taken.
+    /// One exception: where both this pass's cable at such an end and the cable of
+    /// `earlier` read too thin for this pass's scale (beyond `width_tolerance`: a photo
+    /// shrunk for wide cables), the latter having suited its own pass's scale,
+    /// `earlier`'s is taken and this pass's dropped: a wire beside a power cable,
+    /// walked astray where it is 2-3 px wide (README, Any camera, "A wire walked too
+    /// thin").
+    /// Returns how many cables were taken where this pass had none (a cable replaced
+    /// is not counted: this pass did see it, and the count tells the pipeline whether
+    /// this pass's scale lost cables).
     pub fn adopt_lost(
         &mut self,
         points: &mut Vec<[f64; 2]>,
@@ -313,6 +321,11 @@ impl Segmentation {
         let margin = params.border_margin_px / earlier.working_scale;
         let at_frame = |p: &[f32; 2]| border_inset(*p, width, height) <= margin;
         let mut taken = 0;
+        // This pass's cables that a cable of `earlier` replaces.
+        let mut replaced = vec![false; own];
+        let here = self.working_scale;
+        let ratio_at =
+            |c: &Cable, scale: f32| f64::from(params.nominal_width_px / (c.width_px * scale));
         for mut cable in earlier.cables {
             let same = |i: usize| {
                 let q = earlier_ends.0[i].map(|v| v as f32);
@@ -322,11 +335,22 @@ impl Segmentation {
             };
             let matched = cable.end_indices.map(|i| i.map(|i| (i, same(i))));
             let ends_here = || matched.iter().flatten().filter_map(|&(_, j)| j);
-            if ends_here().any(|j| self.end_cables[j].is_some()) {
+            let ratio = ratio_at(&cable, here);
+            let unsuited = off_by_more(ratio, params.width_tolerance);
+            // A cable of this pass at one of its ends stands, unless both read too thin
+            // for this scale and `cable` suited its own: a wire walked in a photo shrunk
+            // for a power cable, where it is too thin to follow.
+            let suited_there = !off_by_more(
+                ratio_at(&cable, earlier.working_scale),
+                params.width_tolerance,
+            );
+            let rivals: Vec<usize> = ends_here().filter_map(|j| self.end_cables[j]).collect();
+            let too_thin = |ratio: f64| ratio > f64::from(params.width_tolerance);
+            let outdone = |c: usize| c < own && too_thin(ratio_at(&self.cables[c], here));
+            let replaces = too_thin(ratio) && suited_there && rivals.iter().all(|&c| outdone(c));
+            if !rivals.is_empty() && !replaces {
                 continue;
             }
-            let ratio = f64::from(params.nominal_width_px / (cable.width_px * self.working_scale));
-            let unsuited = off_by_more(ratio, params.width_tolerance);
             let no_end = cable.end_indices.iter().all(Option::is_none)
                 && (enlarged
                     || [cable.polyline.first(), cable.polyline.last()]
@@ -338,11 +362,18 @@ impl Segmentation {
             }
             let found: Vec<(&[[f32; 2]], f32)> = self.cables[..own]
                 .iter()
+                .filter(|c| !replaced[c.id] && !rivals.contains(&c.id))
                 .map(|c| (&c.polyline[..], c.width_px / 2.0 + cable.width_px))
                 .collect();
             let near = points_near_any(&cable.polyline, &found);
             if near as f32 >= EXPLAINED_SHARE * cable.polyline.len() as f32 {
                 continue;
+            }
+            for &c in &rivals {
+                replaced[c] = true;
+                for end in self.end_cables.iter_mut().filter(|e| **e == Some(c)) {
+                    *end = None;
+                }
             }
             cable.id = self.cables.len();
             for (index, m) in cable.end_indices.iter_mut().zip(matched) {
@@ -358,10 +389,34 @@ impl Segmentation {
                     self.end_cables[j] = Some(cable.id);
                 }
             }
+            taken += usize::from(rivals.is_empty());
             self.cables.push(cable);
-            taken += 1;
         }
+        self.drop_cables(&replaced);
         taken
+    }
+
+    /// Removes the first cables whose flag in `dropped` is set, renumbering the rest and
+    /// leaving the ends they held without a cable.
+    fn drop_cables(&mut self, dropped: &[bool]) {
+        if !dropped.contains(&true) {
+            return;
+        }
+        let mut next = 0;
+        let new_id: Vec<Option<usize>> = (0..self.cables.len())
+            .map(|i| {
+                let keep = !dropped.get(i).copied().unwrap_or(false);
+                next += usize::from(keep);
+                keep.then_some(next - 1)
+            })
+            .collect();
+        self.cables.retain(|c| new_id[c.id].is_some());
+        for cable in &mut self.cables {
+            cable.id = new_id[cable.id].unwrap_or(cable.id);
+        }
+        for end in &mut self.end_cables {
+            *end = end.and_then(|c| new_id[c]);
+        }
     }
 }
 
@@ -557,6 +612,52 @@ mod tests {
         assert_eq!(seg.cables[1].end_indices, [Some(2), None]);
         assert_eq!(seg.end_cables, [Some(0), Some(0), Some(1)]);
         assert_eq!(points.len(), 3);
+    }
+
+    #[test]
+    fn a_wire_walked_too_thin_in_a_shrunk_pass_gives_way_to_the_one_that_suited_its_scale() {
+        // The second pass, at half the size for a 20 px power cable (ends 0 and 1),
+        // walked a wire 6 px wide (3 working px: too thin to follow there) from end 2
+        // off its course, and another from end 3.
+        let (mut seg, mut points, mut confidences) = second_pass(20.0, [300.0, 100.0]);
+        let astray = wide(1, [[300.0, 100.0], [600.0, 100.0]], [Some(2), None], 6.0);
+        seg.cables.push(astray);
+        seg.cables
+            .push(wide(2, [[50.0, 50.0], [50.0, 300.0]], [Some(3), None], 6.0));
+        seg.end_cables[2] = Some(1);
+        seg.end_cables.push(Some(2));
+        points.push([50.0, 50.0]);
+        confidences.push(0.6);
+        let earlier = found(
+            1.0,
+            vec![
+                // The wire from end 2 as the first pass read it, at a width its scale
+                // suits: it replaces the stray walk.
+                wide(0, [[300.0, 100.0], [300.0, 380.0]], [Some(0), None], 7.0),
+                // From end 3, but 3 px wide at the first pass too: it suited neither
+                // scale, so the second pass's walk stands.
+                wide(1, [[50.0, 50.0], [300.0, 50.0]], [Some(1), None], 3.0),
+            ],
+            Vec::new(),
+        );
+        let taken = seg.adopt_lost(
+            &mut points,
+            &mut confidences,
+            earlier,
+            (&[[300.0, 101.0], [50.0, 51.0]], &[0.5, 0.6]),
+            &Params::default(),
+        );
+        assert_eq!(taken, 0, "a cable replaced is not counted as taken");
+        assert_eq!(seg.cables.len(), 3);
+        assert_eq!(
+            seg.cables.iter().map(|c| c.id).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
+        assert_eq!(seg.cables[1].ends, [[50.0, 50.0], [50.0, 300.0]]);
+        assert_eq!(seg.cables[2].ends, [[300.0, 100.0], [300.0, 380.0]]);
+        assert_eq!(seg.cables[2].end_indices, [Some(2), None]);
+        assert_eq!(seg.end_cables, [Some(0), Some(0), Some(2), Some(1)]);
+        assert_eq!(points.len(), 4);
     }
 
     #[test]
