@@ -288,6 +288,37 @@ pub(super) fn median_rgb(image: &RgbImage, line: &[[f32; 2]]) -> [u8; 3] {
     channels.map(|mut ch| median(&mut ch, u8::cmp).unwrap_or(0))
 }
 
+/// Removes the cables of `cables` flagged in `dropped` (one flag each) and renumbers
+/// the rest in order; `end_cables` (given end to cable) follows, the ends of dropped
+/// cables left without one.
+pub(super) fn drop_cables(
+    cables: &mut Vec<Cable>,
+    end_cables: &mut [Option<usize>],
+    dropped: &[bool],
+) {
+    debug_assert_eq!(cables.len(), dropped.len());
+    let mut id = vec![None; cables.len()];
+    let mut next = 0;
+    for (k, gone) in dropped.iter().enumerate() {
+        if !gone {
+            id[k] = Some(next);
+            next += 1;
+        }
+    }
+    for end in end_cables.iter_mut() {
+        *end = end.and_then(|old| id[old]);
+    }
+    let kept = std::mem::take(cables);
+    *cables = kept
+        .into_iter()
+        .zip(id)
+        .filter_map(|(mut cable, id)| {
+            cable.id = id?;
+            Some(cable)
+        })
+        .collect();
+}
+
 /// A 640x480 segmentation at `working_scale` of `cables` and its `end_cables`, for the
 /// engine's unit tests.
 #[cfg(test)]

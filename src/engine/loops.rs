@@ -22,7 +22,7 @@ use std::collections::BinaryHeap;
 
 use super::Cable;
 use super::Params;
-use super::cable::{Fitted, LOOP_MIN_WIDTHS, fit_refined, median_rgb};
+use super::cable::{Fitted, LOOP_MIN_WIDTHS, drop_cables, fit_refined, median_rgb};
 use super::color::LabImage;
 use super::field::VertexField;
 use super::geometry::{
@@ -163,26 +163,7 @@ pub(super) fn close_loops(
             close_loop(cables, i, course, &mut dropped, ground);
         }
     }
-    let mut id = vec![None; cables.len()];
-    let mut next = 0;
-    for (k, gone) in dropped.iter().enumerate() {
-        if !gone {
-            id[k] = Some(next);
-            next += 1;
-        }
-    }
-    for end in end_cables.iter_mut() {
-        *end = end.and_then(|old| id[old]);
-    }
-    let kept = std::mem::take(cables);
-    *cables = kept
-        .into_iter()
-        .zip(id)
-        .filter_map(|(mut cable, id)| {
-            cable.id = id?;
-            Some(cable)
-        })
-        .collect();
+    drop_cables(cables, end_cables, &dropped);
 }
 
 /// Splices `course`, a loop cable `i` was walked across, into it, unless the loop runs

@@ -15,6 +15,7 @@ use std::cmp::Ordering;
 
 use image::RgbImage;
 
+use super::cable::drop_cables;
 use super::geometry::{border_inset, dist, points_near_any, polyline_length};
 use super::resample::{box_shrink, resize_to};
 use super::{Cable, CableField, MIN_SIDE, Params, Segmentation};
@@ -326,6 +327,7 @@ impl Segmentation {
         let here = self.working_scale;
         let ratio_at =
             |c: &Cable, scale: f32| f64::from(params.nominal_width_px / (c.width_px * scale));
+        let too_thin = |ratio: f64| ratio > f64::from(params.width_tolerance);
         for mut cable in earlier.cables {
             let same = |i: usize| {
                 let q = earlier_ends.0[i].map(|v| v as f32);
@@ -345,7 +347,6 @@ impl Segmentation {
                 params.width_tolerance,
             );
             let rivals: Vec<usize> = ends_here().filter_map(|j| self.end_cables[j]).collect();
-            let too_thin = |ratio: f64| ratio > f64::from(params.width_tolerance);
             let outdone = |c: usize| c < own && too_thin(ratio_at(&self.cables[c], here));
             let replaces = too_thin(ratio) && suited_there && rivals.iter().all(|&c| outdone(c));
             if !rivals.is_empty() && !replaces {
@@ -392,31 +393,10 @@ impl Segmentation {
             taken += usize::from(rivals.is_empty());
             self.cables.push(cable);
         }
-        self.drop_cables(&replaced);
+        // The cables taken in are kept.
+        replaced.resize(self.cables.len(), false);
+        drop_cables(&mut self.cables, &mut self.end_cables, &replaced);
         taken
-    }
-
-    /// Removes the first cables whose flag in `dropped` is set, renumbering the rest and
-    /// leaving the ends they held without a cable.
-    fn drop_cables(&mut self, dropped: &[bool]) {
-        if !dropped.contains(&true) {
-            return;
-        }
-        let mut next = 0;
-        let new_id: Vec<Option<usize>> = (0..self.cables.len())
-            .map(|i| {
-                let keep = !dropped.get(i).copied().unwrap_or(false);
-                next += usize::from(keep);
-                keep.then_some(next - 1)
-            })
-            .collect();
-        self.cables.retain(|c| new_id[c.id].is_some());
-        for cable in &mut self.cables {
-            cable.id = new_id[cable.id].unwrap_or(cable.id);
-        }
-        for end in &mut self.end_cables {
-            *end = end.and_then(|c| new_id[c]);
-        }
     }
 }
 
