@@ -319,6 +319,24 @@ pub(super) fn drop_cables(
         .collect();
 }
 
+/// Drops the cables shorter than [`Params::field_short_widths`] nominal widths that
+/// score under [`Params::field_short_min_score`] (a field's floor for short cables:
+/// walks over photographed clutter end soon and score low); their ends are left free.
+pub(super) fn drop_short_weak(
+    cables: &mut Vec<Cable>,
+    end_cables: &mut [Option<usize>],
+    params: &Params,
+) {
+    let short = params.field_short_widths * params.nominal_width_px;
+    let weak: Vec<bool> = cables
+        .iter()
+        .map(|c| c.length_px < short && c.score < params.field_short_min_score)
+        .collect();
+    if weak.contains(&true) {
+        drop_cables(cables, end_cables, &weak);
+    }
+}
+
 /// A 640x480 segmentation at `working_scale` of `cables` and its `end_cables`, for the
 /// engine's unit tests.
 #[cfg(test)]
@@ -409,5 +427,43 @@ mod tests {
             .iter()
             .fold((f32::MAX, f32::MIN), |(lo, hi), &y| (lo.min(y), hi.max(y)));
         assert!(lo > 17.0 && hi < 20.5, "rows {lo}..{hi}");
+    }
+
+    #[test]
+    fn only_a_cable_both_short_and_weak_is_dropped_and_its_ends_freed() {
+        let params = Params::default();
+        let short = params.field_short_widths * params.nominal_width_px;
+        let weak = params.field_short_min_score;
+        let cable = |id: usize, length: f32, score: f32| Cable {
+            score,
+            ..straight(
+                id,
+                [[100.0, 100.0], [100.0 + length, 100.0]],
+                [Some(2 * id), Some(2 * id + 1)],
+            )
+        };
+        let mut cables = vec![
+            cable(0, 0.8 * short, 0.5 * weak),
+            cable(1, 1.2 * short, 0.5 * weak),
+            cable(2, 0.8 * short, 2.0 * weak),
+            cable(3, 0.5 * short, 0.9 * weak),
+        ];
+        let mut end_cables: Vec<Option<usize>> = (0..8).map(|i| Some(i / 2)).collect();
+        drop_short_weak(&mut cables, &mut end_cables, &params);
+        // The long weak one and the short strong one stay, renumbered.
+        let scores: Vec<f32> = cables.iter().map(|c| c.score).collect();
+        assert_eq!(scores, [0.5 * weak, 2.0 * weak]);
+        assert_eq!(cables.iter().map(|c| c.id).collect::<Vec<_>>(), [0, 1]);
+        assert_eq!(
+            end_cables,
+            [None, None, Some(0), Some(0), Some(1), Some(1), None, None]
+        );
+        let mut none = vec![cable(0, 0.5 * short, 0.0)];
+        let off = Params {
+            field_short_min_score: 0.0,
+            ..params
+        };
+        drop_short_weak(&mut none, &mut [Some(0), Some(0)], &off);
+        assert_eq!(none.len(), 1, "a floor of 0 drops nothing");
     }
 }

@@ -347,6 +347,9 @@ pub fn segment_oversegmented(
         twins::split_twins(&mut cables, &mut end_cables, &lab, image, params);
         timings.splines += ms(t);
     }
+    if field.is_some() {
+        cable::drop_short_weak(&mut cables, &mut end_cables, params);
+    }
 
     Ok(Segmentation {
         width,

@@ -377,6 +377,14 @@ pub struct Params {
     /// floor: a piece's two ends are seeds because they bound one piece, so a walk from
     /// one reaching the other adds nothing. 1: the same floor as every cable.
     pub field_reached_floor: f32,
+    /// With a field, the least score of a cable shorter than `field_short_widths`
+    /// nominal widths, however it was found. Walks that wander over photographed
+    /// clutter (brick, handwriting, shelving) end soon and score low; a real cable
+    /// that short and that weak is rare, and losing one costs few pixels (README, "How
+    /// the engine uses the field", "Short, weak cables"). 0: no such floor.
+    pub field_short_min_score: f32,
+    /// Length below which [`Params::field_short_min_score`] applies, nominal widths.
+    pub field_short_widths: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
     /// (README, "How the engine uses the field"). 1 or more: no such seeds.
@@ -500,6 +508,8 @@ impl Default for Params {
             field_border_min_score: 0.12,
             field_border_sure_level: 0.7,
             field_min_cable_score: 0.03,
+            field_short_min_score: 0.08,
+            field_short_widths: 20.0,
             field_reached_floor: 0.7,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
