@@ -379,7 +379,7 @@ pub struct Params {
     pub field_reached_floor: f32,
     /// With a field, the least score of a cable shorter than `field_short_widths`
     /// nominal widths, however it was found. Walks that wander over photographed
-    /// clutter (brick, handwriting, shelving) end soon and score low; a real cable
+    /// clutter (brick, print, a cluttered room) end soon and score low; a real cable
     /// that short and that weak is rare, and losing one costs few pixels (README, "How
     /// the engine uses the field", "Short, weak cables"). 0: no such floor.
     pub field_short_min_score: f32,
