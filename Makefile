@@ -30,7 +30,7 @@ eval: setup
 eval-detect: setup
 	cargo run --release -- eval --endpoints detect
 
-# Synthetic scenes the development split lacks (README, Accuracy), drawn into out/stress
+# Synthetic scenes the development split lacks (docs/ACCURACY.md), drawn into out/stress
 # and evaluated from a photo alone and from the true ends.
 stress: setup
 	training/.venv/bin/python scripts/stress.py out/stress

@@ -9,8 +9,8 @@
 //! its ends are ignored but its cable field still guides the walks. It needs no
 //! superpixels and SLIC needs no network, so with [`Job::overlap`] it runs on a second
 //! (scoped) thread while SLIC runs on the caller's: a request uses at most two
-//! threads, and a lone request on an idle machine is answered sooner (README,
-//! "Performance"). The results are the same either way.
+//! threads, and a lone request on an idle machine is answered sooner (docs/PERFORMANCE.md).
+//! The results are the same either way.
 
 use std::time::Instant;
 
@@ -126,7 +126,7 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         Ok::<_, PipelineError>((pass, frame))
     };
     // Cables too wide for the network to see (a camera much closer): at half the size,
-    // and at a quarter if the field asks again (README, "Any camera").
+    // and at a quarter if the field asks again (docs/CAMERAS.md).
     while pass.too_wide {
         k *= 0.5;
         (pass, frame) = again(&pass, k, k > MIN_CORRECTION)?;
@@ -143,7 +143,7 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
         }
     }
     // Cables far wider or thinner than the engine's lengths suit (a closer or farther
-    // camera): once more at the scale that makes them nominal (README, "Any camera").
+    // camera): once more at the scale that makes them nominal (docs/CAMERAS.md).
     let corrected = pass
         .segmentation
         .width_correction(&frame, job.params)
@@ -183,8 +183,8 @@ pub fn run(job: &Job<'_>) -> Result<Output, PipelineError> {
     // Masks as wide as the cables read. Wide cables read sub-linearly, so shrunk
     // photos' cables still read wider than nominal: their masks follow whatever is left,
     // never narrower; thin ones enlarged keep `mask_width_px`; at the first pass's
-    // scale masks follow only a width off by more than `mask_width_tolerance` (README,
-    // "Any camera").
+    // scale masks follow only a width off by more than `mask_width_tolerance`
+    // (docs/CAMERAS.md).
     let (params, found) = (job.params, &pass.segmentation);
     let mask_scale = if let Some(scale) = mixed_mask_scale {
         scale
@@ -262,7 +262,7 @@ impl Pass {
         let t = Instant::now();
         let resampled = frame.resample(photo);
         // A dim photo is brightened, by one gain for the network's source and the
-        // engine's image, and a soft one sharpened (README, "Any camera").
+        // engine's image, and a soft one sharpened (docs/CAMERAS.md).
         let params = frame.params(job.params);
         let gain = exposure::gain(&resampled, params.exposure_level, params.exposure_max_gain);
         let lit = exposure::apply(&resampled, gain);

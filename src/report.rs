@@ -19,7 +19,7 @@ pub struct SegmentResponse {
     /// Image height, pixels.
     pub height: u32,
     /// Working pixels per photo pixel: the photo was segmented resampled by this factor
-    /// (1 at 640x480; README, "Any camera"). `width`, `height` and every coordinate
+    /// (1 at 640x480; docs/CAMERAS.md). `width`, `height` and every coordinate
     /// are in pixels of the photo as displayed (its EXIF orientation applied).
     pub working_scale: f32,
     /// Cables found, by decreasing score.

@@ -1,6 +1,6 @@
 //! Any camera: photos with an EXIF orientation, portrait photos, a 12 MP photo and a
 //! perspective scene are segmented in the pixels of the photo as displayed, at the
-//! working resolution (README, "Any camera"). Ends are given, so no model is needed.
+//! working resolution (docs/CAMERAS.md). Ends are given, so no model is needed.
 
 #![allow(clippy::unwrap_used)] // test code: a failure should panic
 

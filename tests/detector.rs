@@ -240,13 +240,12 @@ fn the_network_beside_slic_gives_the_sequential_result() {
 /// Cables 32 px wide at 640x480 (a camera about four times closer than the development
 /// photos'), far wider than any the network learnt: at the working size its field
 /// shows none of them and the engine found nothing, not even from the true ends. Its
-/// field at half the size shows them, so the photo is worked smaller (README, "Any
-/// camera"). Measured over the four scenes: mask IoU 0.59 / 0.20 / 0.60 / 0.67 with
-/// the true ends and 0.38 / 0.75 / 0.27 / 0.38 from a photo alone, against 0.00 with
-/// the field's probe and the look at half size when nothing is found both off
-/// (`wide_field_ratio` 100, `empty_rescale` 1) but for 0.002 once. The look alone
-/// reaches the same scale in seven runs of the eight (0.00 from a photo alone on seed
-/// 3, where the probe gives 0.27).
+/// field at half the size shows them, so the photo is worked smaller (docs/CAMERAS.md).
+/// Measured over the four scenes: mask IoU 0.59 / 0.20 / 0.60 / 0.67 with the true ends and
+/// 0.38 / 0.75 / 0.27 / 0.38 from a photo alone, against 0.00 with the field's probe and
+/// the look at half size when nothing is found both off (`wide_field_ratio` 100,
+/// `empty_rescale` 1) but for 0.002 once. The look alone reaches the same scale in seven
+/// runs of the eight (0.00 from a photo alone on seed 3, where the probe gives 0.27).
 #[test]
 fn cables_too_wide_for_the_network_are_found_at_a_smaller_scale() {
     use ariadne_dlo::synth::{Background, SceneSpec, scene};
@@ -316,10 +315,10 @@ fn cables_too_wide_for_the_network_are_found_at_a_smaller_scale() {
 /// too, and score under the floor for cables with no end in view: nothing is found,
 /// so no width is read to correct the scale by. Looked at once more at half the size
 /// (`empty_rescale`), the yellow cable is found, and the photo is then segmented at the
-/// scale its width asks for (README, "Any camera"). The white one stays lost. Both runs
+/// scale its width asks for (docs/CAMERAS.md). The white one stays lost. Both runs
 /// leave the traces in the field out (`field_trace_level` 1): traces from where the
 /// cables meet the frame's edge find two cables in the first pass, so that the photo
-/// is never empty (README, "A wire no superpixel follows").
+/// is never empty (docs/ENGINE.md, "A wire no superpixel follows").
 #[test]
 fn a_photo_in_which_nothing_is_found_is_looked_at_smaller() {
     let network = OnnxDetector::load(&DetectorConfig::default(), 1)

@@ -66,14 +66,13 @@ async fn a_photo_alone_is_segmented_with_detected_ends() {
 /// as a cable of its own, 0.83 of the centreline covered). In `LoopCrossedByAnother` both
 /// cables are found, but the blue one without its loop (0.75 of the centrelines
 /// covered): its cables read 12 px wide, so the photo is segmented again at 0.65,
-/// where the loop (29 px in radius there) is not taken in (README, How the engine uses
-/// the field, "A cable that loops over itself"); from its ends at the photo's own scale
-/// it is (`tests/engine.rs`). In `Mixed` the two wires set
-/// the scale and the photo is segmented again enlarged, where the power cable is too
-/// wide to follow: it is found only because the first pass's cable is taken in
-/// (`Segmentation::adopt_lost`). In `PaleNoEndInView` the pale cable crossing the white
-/// board scores too little by colour and contrast for a cable from border seeds; it is
-/// found only because the field is sure of it (`field_border_sure_level`). Every
+/// where the loop (29 px in radius there) is not taken in (docs/ENGINE.md, "A cable that
+/// loops over itself"); from its ends at the photo's own scale it is (`tests/engine.rs`).
+/// In `Mixed` the two wires set the scale and the photo is segmented again enlarged, where
+/// the power cable is too wide to follow: it is found only because the first pass's cable
+/// is taken in (`Segmentation::adopt_lost`). In `PaleNoEndInView` the pale cable crossing
+/// the white board scores too little by colour and contrast for a cable from border seeds;
+/// it is found only because the field is sure of it (`field_border_sure_level`). Every
 /// terminal must be among the ends (within the evaluation's 15 px), but for the one
 /// `TerminalAgainstCable` presses against another cable and the one
 /// `TerminalBesideCable` ends beside another (without `Walker::runs_on_past` the walks
@@ -121,10 +120,10 @@ fn hard_synthetic_cases_are_found_from_a_photo_alone() {
         );
         assert_eq!(matched, truth.len(), "{case:?}: a true cable was missed");
         assert_eq!(found.len(), truth.len(), "{case:?}: extra cables");
-        // The terminal pressed against the other cable's side is a known miss (README,
-        // How the engine uses the field, "The second twin's terminal"): the network
-        // reports no end there. So is the one beside the other cable ("Passing a
-        // terminal beside the cable"): its 11 px cables are segmented again at about
+        // The terminal pressed against the other cable's side is a known miss
+        // (docs/ENGINE.md, "The second twin's terminal"): the network reports no end there.
+        // So is the one beside the other cable ("Passing a terminal beside the cable"): its
+        // 11 px cables are segmented again at about
         // 0.7 of the size, where the network sees no end 3 px from the other cable's rim.
         let known_misses = usize::from(matches!(
             case,

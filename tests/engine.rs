@@ -460,21 +460,20 @@ fn with_field_and(
 /// touching point. Not `SideBySideThin`: there the field's two cables, 16 px apart,
 /// make one piece (joined at their right-hand ends), whose two farthest superpixels are
 /// the two left-hand ends; the walk from each follows its cable to the right and stops
-/// there, at no seed and not at the border, so nothing is found (README, "How the
-/// engine uses the field"). With their ends in view both are found (the tests above).
-/// In `Crossing` the two cables make one X-shaped piece; its two farthest superpixels
-/// are the ends of one branch each, and the other two ends are seeded as the tips of
-/// its other branches. Nor `CrossingLoop` (its piece of field is one loop with two
-/// tails; not found whole from it). Nor `Mixed`: with no end at all, three cables are
-/// found, one of them 94 px off its truth (a 16 px power cable crossed by two 5 px
-/// wires makes one piece; the engine alone, at one scale, serves neither width; from
-/// their ends, as above, all three are found, and from a photo alone the pipeline's
-/// two passes find them, `tests/e2e.rs`). In `TerminalAgainstCable` (the field joins
-/// the two cables into one T-shaped piece, and the second's end, touching the first,
-/// is the tip of no branch), `LoopCrossedByAnother` and `TerminalBesideCable`, one
-/// cable of each pair was found alone until a walk that loses the cable along a field
-/// as sure of it as `field_border_sure_level` counted as a cable (its end a terminal
-/// the network missed), not only one reaching the border or a seed (session 57).
+/// there, at no seed and not at the border, so nothing is found (docs/ENGINE.md). With
+/// their ends in view both are found (the tests above). In `Crossing` the two cables make
+/// one X-shaped piece; its two farthest superpixels are the ends of one branch each, and
+/// the other two ends are seeded as the tips of its other branches. Nor `CrossingLoop` (its
+/// piece of field is one loop with two tails; not found whole from it). Nor `Mixed`: with
+/// no end at all, three cables are found, one of them 94 px off its truth (a 16 px power
+/// cable crossed by two 5 px wires makes one piece; the engine alone, at one scale, serves
+/// neither width; from their ends, as above, all three are found, and from a photo alone
+/// the pipeline's two passes find them, `tests/e2e.rs`). In `TerminalAgainstCable` (the
+/// field joins the two cables into one T-shaped piece, and the second's end, touching the
+/// first, is the tip of no branch), `LoopCrossedByAnother` and `TerminalBesideCable`, one
+/// cable of each pair was found alone until a walk that loses the cable along a field as
+/// sure of it as `field_border_sure_level` counted as a cable (its end a terminal the
+/// network missed), not only one reaching the border or a seed (session 57).
 #[test]
 fn cables_whose_ends_were_missed_are_found_from_the_field() {
     use ariadne_dlo::synth::Case;

@@ -3,7 +3,7 @@
 //! terminal's x/y offset in its cell, 4-5 cos 2θ and sin 2θ of the cable's direction.
 //! A terminal peak with no cable beside it ([`Decoding::min_cable`]) is not an end: on
 //! backgrounds the network never saw, texture fires the terminal head more often than
-//! the cable head (README, Accuracy).
+//! the cable head (docs/ACCURACY.md).
 
 use super::output::{Decoding, END_CABLE_REACH, Letterbox, heatmap};
 use super::{DetectError, Perception};

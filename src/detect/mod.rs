@@ -161,17 +161,17 @@ pub struct DetectorConfig {
     /// Network input height.
     pub model_input_height: usize,
     /// Lowest detection confidence kept as an end (0.25: the best of 0.15-0.45 on
-    /// backgrounds the network never saw, leave-one-background-out; README, Accuracy).
+    /// backgrounds the network never saw, leave-one-background-out; docs/ACCURACY.md).
     pub detect_threshold: f32,
     /// Terminal peaks at or above this but under `detect_threshold` start no walk, but
     /// one where a cable found from the other ends stops is reported as its end, with
-    /// its own confidence (README, Accuracy, "Ends a cable confirms"; at or above
+    /// its own confidence (docs/ACCURACY.md, "Ends a cable confirms"; at or above
     /// `detect_threshold`: none).
     pub detect_confirm_threshold: f32,
     /// Ends closer than this many photo pixels are merged (the more confident is kept).
     pub detect_nms_px: f64,
     /// With a cable-field model, ends with no cable probability of at least this within
-    /// two cells are dropped (0 keeps every end; README, Accuracy).
+    /// two cells are dropped (0 keeps every end; docs/ACCURACY.md).
     pub detect_min_cable: f32,
     /// ONNX Runtime threads per inference (it does not read container CPU limits itself).
     pub ort_threads: usize,

@@ -297,7 +297,7 @@ pub fn border_seeds(
 /// grazing angle, or through a corner, stands out along more of the border than one
 /// crossing it squarely, and its crossing lies somewhere along the run rather than in
 /// its middle: walks start there, but a walk reaching the run ends on the border
-/// itself, not at its middle (README, "A grazing crossing of the border").
+/// itself, not at its middle (docs/ENGINE.md, "A grazing crossing of the border").
 fn seeds_where(
     sp: &Superpixels,
     params: &Params,

@@ -1,7 +1,7 @@
 //! Ends a cable confirms: a terminal peak too weak to start a walk from, lying where a
 //! cable found from the other ends stops inside the frame, is that cable's end. On a
 //! background the network never saw it is less sure of the terminals it does see
-//! (README, Accuracy, "Ends a cable confirms"); walking from every weak peak would
+//! (docs/ACCURACY.md, "Ends a cable confirms"); walking from every weak peak would
 //! start false cables, but a cable that stops on one confirms it. Not a peak on another
 //! cable: where one cable passes under another the network sees a weak end, and a walk
 //! that lost its cable there stops on it.

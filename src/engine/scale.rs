@@ -242,9 +242,9 @@ impl Segmentation {
     /// where that asks to shrink the photo, no less than keeps its thin cables
     /// ([`thin_width`]) at least `nominal_width_px / width_tolerance` wide (and at most
     /// 1): power cables among signal wires would have the photo shrunk until the wires
-    /// are 2-3 px wide and lost, where at this scale both are followed (README, Any
-    /// camera, "Power cables do not shrink a photo past its wires"). `None` when there
-    /// is no cable to measure.
+    /// are 2-3 px wide and lost, where at this scale both are followed (docs/CAMERAS.md,
+    /// "Power cables do not shrink a photo past its wires"). `None` when there is no cable
+    /// to measure.
     fn width_ratio(&self, frame: &WorkingFrame, params: &Params) -> Option<f64> {
         let scale = frame.scale();
         let all: Vec<Reading> = self
@@ -302,7 +302,7 @@ impl Segmentation {
     /// `earlier` read too thin for this pass's scale (beyond `width_tolerance`: a photo
     /// shrunk for wide cables), the latter having suited its own pass's scale,
     /// `earlier`'s is taken and this pass's dropped: a wire beside a power cable,
-    /// walked astray where it is 2-3 px wide (README, Any camera, "A wire walked too
+    /// walked astray where it is 2-3 px wide (docs/CAMERAS.md, "A wire walked too
     /// thin").
     /// Returns how many cables were taken where this pass had none (a cable replaced
     /// is not counted: this pass did see it, and the count tells the pipeline whether
@@ -408,7 +408,7 @@ impl Segmentation {
 /// all, and the engine finds nothing to measure. At half the size a cell covers four
 /// times the photo, so the shares of the two fields compare as they are; on the
 /// development photos, as taken or enlarged up to twofold, the half-size field's share
-/// is 0.9-1.9 times the other's (README, "Any camera").
+/// is 0.9-1.9 times the other's (docs/CAMERAS.md).
 pub fn too_wide_for_the_field(full: &CableField, half: &CableField, ratio: f32) -> bool {
     half.cable_cells(FIELD_CABLE_LEVEL) >= WIDE_MIN_CELLS
         && half.cable_share(FIELD_CABLE_LEVEL) > ratio * full.cable_share(FIELD_CABLE_LEVEL)

@@ -425,8 +425,8 @@ fn mean(samples: &[[f32; 3]]) -> [f32; 3] {
 /// cable's width at half its peak. The band's own ends, where the contrast passes a
 /// share of the whole profile's peak, take in the blur of the photo and of the Lab
 /// image: twins 9-11 px wide read 11.5-12, and a photo of such pairs was shrunk for
-/// them until the pairs ran together (README, "Two cables laid together"). The whole
-/// profile's peak would not do either: between two pale cables their rims meet and
+/// them until the pairs ran together (docs/ENGINE.md, "Two cables laid together"). The
+/// whole profile's peak would not do either: between two pale cables their rims meet and
 /// outdo the outer ones.
 fn outer_span(fg: &[f32], lo: usize, hi: usize, reach: usize) -> f32 {
     let [first, last] = outer_edges(fg, lo, hi, reach);

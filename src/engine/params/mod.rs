@@ -61,7 +61,7 @@ pub struct Params {
     pub width_tolerance: f32,
     /// When it is off nominal by more than this factor but within `width_tolerance`
     /// (no second pass), the masks are drawn that much wider or thinner than
-    /// `mask_width_px` (README, "Any camera").
+    /// `mask_width_px` (docs/CAMERAS.md).
     pub mask_width_tolerance: f32,
     /// Cables too wide for the network (a camera much closer than the development
     /// photos'): when the cable field seen at half the working size calls more than
@@ -73,7 +73,7 @@ pub struct Params {
     /// segmented once more at this times the working scale, and that pass is kept when
     /// it finds any: cables much wider than nominal read little lateral contrast and
     /// score under the floors at the working scale, so no width is read to correct the
-    /// scale by (README, "Any camera"). 1: never.
+    /// scale by (docs/CAMERAS.md). 1: never.
     pub empty_rescale: f32,
 
     // --- graph ---
@@ -150,7 +150,7 @@ pub struct Params {
     pub closed_min_length_px: f32,
     /// A weaker terminal peak (one the detector keeps as a candidate, under its
     /// threshold) within this many pixels of a cable's free end, not at the frame's
-    /// border, is reported as that cable's end; 0 reports none (README, Accuracy, "Ends
+    /// border, is reported as that cable's end; 0 reports none (docs/ACCURACY.md, "Ends
     /// a cable confirms").
     pub end_confirm_px: f32,
 
@@ -183,8 +183,7 @@ pub struct Params {
     /// to the image two superpixel steps to either side (0: no such cap). The strip of
     /// background between two same-colour cables side by side differs from the cables
     /// on both sides, as a cable differs from the background, but it matches the
-    /// background beyond them; a cable does not (README, "How the engine uses the
-    /// field").
+    /// background beyond them; a cable does not (docs/ENGINE.md).
     pub far_contrast_factor: f32,
     /// A head counts as heading out of the frame when the component of its unit heading
     /// towards the near edge is at least this.
@@ -263,7 +262,7 @@ pub struct Params {
     pub border_max_crossing_px: u32,
     /// Longest run from which walks still start, though none ends there: a cable
     /// crossing the border at a grazing angle, or leaving through a corner, stands out
-    /// along more of it (README, "A grazing crossing of the border").
+    /// along more of it (docs/ENGINE.md, "A grazing crossing of the border").
     pub border_max_start_px: u32,
     /// A border seed counts as this sure as a given end.
     pub border_seed_confidence: f32,
@@ -333,13 +332,13 @@ pub struct Params {
     pub field_close_min_alignment: f32,
     /// A walk along a cable that runs on behind its seed, the way it opens (the field
     /// and the photo show the same cable there: a cable that passes the end, the end's
-    /// tip pushed against it), has its hypothesis score multiplied by this (README,
-    /// "How the engine uses the field"). 1: no such rule.
+    /// tip pushed against it), has its hypothesis score multiplied by this
+    /// (docs/ENGINE.md). 1: no such rule.
     pub field_through_factor: f32,
     /// Weight w of how a walk from an end opens along the field's direction at the end:
     /// its quality is multiplied by 1 − w + w·a, a the agreement of its opening way with
-    /// that direction ([`crate::engine::walk::Walk::opening`]; README, "How the engine
-    /// uses the field"). 0: no such term.
+    /// that direction ([`crate::engine::walk::Walk::opening`]; docs/ENGINE.md). 0: no such
+    /// term.
     pub field_opening_weight: f32,
     /// Exponent of the walk's mean cable probability in its quality.
     pub quality_field_exponent: f32,
@@ -356,10 +355,9 @@ pub struct Params {
     /// field is taken to be sure of it: such a walk needs only the score an end's cable
     /// needs (`field_min_cable_score`), not `field_border_min_score`. A pale cable on a
     /// pale board crossing the frame has little colour likelihood and lateral contrast
-    /// to score by, yet the field sees it whole (README, "How the engine uses the
-    /// field"). Such a walk also counts where it loses the cable (a terminal the
-    /// network missed), not only at the border or another seed. 1: only walks over a
-    /// field certain everywhere (a network's never is).
+    /// to score by, yet the field sees it whole (docs/ENGINE.md). Such a walk also counts
+    /// where it loses the cable (a terminal the network missed), not only at the border or
+    /// another seed. 1: only walks over a field certain everywhere (a network's never is).
     pub field_border_sure_level: f32,
     /// `min_cable_score` when the field is used: its share in every score keeps walks
     /// over the background out, so weaker cables (a pale cable on a pale card, whose
@@ -372,35 +370,35 @@ pub struct Params {
     /// credible: a walk over the background rarely arrives at a true end, but may link
     /// two false ones. A dark cable on a dark board keeps little colour likelihood and
     /// contrast to score by, and when no walk comes back from the far end to confirm
-    /// it, `unconfirmed_factor` sinks it under the floor (README, "How the engine uses
-    /// the field"). Cables seeded at the border or on pieces of the field keep their
-    /// floor: a piece's two ends are seeds because they bound one piece, so a walk from
-    /// one reaching the other adds nothing. 1: the same floor as every cable.
+    /// it, `unconfirmed_factor` sinks it under the floor (docs/ENGINE.md). Cables seeded at
+    /// the border or on pieces of the field keep their floor: a piece's two ends are seeds
+    /// because they bound one piece, so a walk from one reaching the other adds nothing. 1:
+    /// the same floor as every cable.
     pub field_reached_floor: f32,
     /// With a field, the least score of a cable shorter than `field_short_widths`
     /// nominal widths, however it was found. Walks that wander over photographed
     /// clutter (brick, print, a cluttered room) end soon and score low; a real cable
-    /// that short and that weak is rare, and losing one costs few pixels (README, "How
-    /// the engine uses the field", "Short, weak cables"). 0: no such floor.
+    /// that short and that weak is rare, and losing one costs few pixels (docs/ENGINE.md,
+    /// "Short, weak cables"). 0: no such floor.
     pub field_short_min_score: f32,
     /// Length below which [`Params::field_short_min_score`] applies, nominal widths.
     pub field_short_widths: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
-    /// (README, "How the engine uses the field"). 1 or more: no such seeds.
+    /// (docs/ENGINE.md). 1 or more: no such seeds.
     pub field_orphan_level: f32,
     /// Such a piece seeds walks when its two ends lie this many superpixel steps apart.
     pub field_orphan_min_steps: f32,
     /// A cable found from such a piece runs on past the piece's ends, along the walks
     /// from them that lost the cable further on (where the field fades before the
     /// cable does, short of the end the network missed) or left the frame (across a
-    /// cable found at the piece's end; README, "How the engine uses the field").
+    /// cable found at the piece's end; docs/ENGINE.md).
     pub field_orphan_run_on: bool,
     /// Cable probability a trace in the field follows from an end that no walk found a
     /// cable from, or from where the field's cables meet the frame's edge with no cable
     /// found there, to another such end or out of the frame (a thin dark wire on a dark
     /// card, along which no superpixel runs), and from where a cable's walk was lost
-    /// (README, "How the engine uses the field"). 1 or more: no traces.
+    /// (docs/ENGINE.md). 1 or more: no traces.
     pub field_trace_level: f32,
 }
 

@@ -219,7 +219,7 @@ fn visual_likelihood(similarity: f32, params: &Params) -> f32 {
 /// the frame's side of the cable (they hold no pixels beyond it), so a cable running
 /// out along the edge reads as leaning into the frame by a few degrees (4° where a
 /// thin wire, its photo enlarged 1.76-fold, was taken as lost 5.8 px from the edge it
-/// leaves: README, "A walk stopped against the edge it leaves").
+/// leaves: docs/ENGINE.md, "A walk stopped against the edge it leaves").
 const GRAZING_INWARD: f32 = 0.2;
 
 /// How far inside the frame a border walk's exit is placed (`Walk::end_point`), so
