@@ -157,6 +157,12 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
 /// A file without the marker at its end (trailing padding aside) is truncated. Headers
 /// that only the lenient decoder accepts (bytes between segments, which some cameras
 /// write) are decoded leniently.
+///
+/// A progressive JPEG (many phones and image editors write them) is decoded with its
+/// marker: after its last scan the decoder looks for the next marker and would run out
+/// of data without one. So a progressive file cut short and given a marker back decodes
+/// without its missing scans (coarser, or grey where the first scan was cut), as other
+/// decoders show it; one cut with no marker is refused as any.
 fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
     let tail = bytes.len().saturating_sub(64);
     let end = bytes[tail..]
@@ -164,7 +170,6 @@ fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
         .rposition(|w| w == [0xFF, 0xD9])
         .map(|i| tail + i)
         .ok_or_else(|| DecodeError::Corrupt("truncated JPEG (no end-of-image marker)".into()))?;
-    let stream = &bytes[..end];
     let options = |strict: bool| {
         DecoderOptions::default()
             .set_strict_mode(strict)
@@ -172,17 +177,30 @@ fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
             .set_max_width(max_side as usize)
             .set_max_height(max_side as usize)
     };
-    let corrupt = |e: zune_jpeg::errors::DecodeErrors| DecodeError::Corrupt(format!("{e:?}"));
-    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(true));
-    if decoder.decode_headers().is_err() {
-        decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(false));
+    let mut decoder = jpeg_decoder(&bytes[..end], options);
+    if decoder.info().is_some_and(|i| i.sof.is_progressive()) {
+        decoder = jpeg_decoder(&bytes[..end + 2], options);
     }
+    let corrupt = |e: zune_jpeg::errors::DecodeErrors| DecodeError::Corrupt(format!("{e:?}"));
     let pixels = decoder.decode().map_err(corrupt)?;
     let (w, h) = decoder
         .dimensions()
         .ok_or_else(|| DecodeError::Corrupt("no frame header".into()))?;
     RgbImage::from_raw(w as u32, h as u32, pixels)
         .ok_or_else(|| DecodeError::Corrupt("decoded size differs from the header".into()))
+}
+
+/// A JPEG decoder over `stream` with its headers read: strictly, or leniently where only
+/// the lenient decoder reads them.
+fn jpeg_decoder(
+    stream: &[u8],
+    options: impl Fn(bool) -> DecoderOptions,
+) -> zune_jpeg::JpegDecoder<ZCursor<&[u8]>> {
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(true));
+    if decoder.decode_headers().is_err() {
+        decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(stream), options(false));
+    }
+    decoder
 }
 
 #[cfg(test)]
@@ -256,6 +274,33 @@ mod tests {
         // Cut with no marker.
         assert!(matches!(
             decode_rgb(&jpeg[..jpeg.len() - 100], u64::MAX),
+            Err(DecodeError::Corrupt(_))
+        ));
+    }
+
+    /// `tests/data/progressive.jpg`: a 160x120 gradient (red = x·255/159, green =
+    /// y·255/119, blue 128) saved as a progressive JPEG, quality 90, by Pillow
+    /// (`Image.save(..., progressive=True, optimize=True)`): SOF2 and ten scans.
+    const PROGRESSIVE: &[u8] = include_bytes!("../tests/data/progressive.jpg");
+
+    #[test]
+    fn progressive_jpeg_is_decoded_and_a_cut_one_refused() {
+        let img = decode_rgb(PROGRESSIVE, u64::MAX).unwrap();
+        assert_eq!(img.dimensions(), (160, 120));
+        let err: f64 = img
+            .enumerate_pixels()
+            .map(|(x, y, p)| {
+                let want = [x * 255 / 159, y * 255 / 119, 128];
+                (0..3)
+                    .map(|c| (p.0[c] as f64 - want[c] as f64).abs())
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            / (160.0 * 120.0 * 3.0);
+        assert!(err < 2.0, "mean error {err}");
+        // Cut within its scans, no marker.
+        assert!(matches!(
+            decode_rgb(&PROGRESSIVE[..PROGRESSIVE.len() - 300], u64::MAX),
             Err(DecodeError::Corrupt(_))
         ));
     }
