@@ -154,9 +154,11 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
 ///
 /// The stream is decoded without its end-of-image marker: a marker would end a scan
 /// that is cut short silently, while running out of data is an error in strict mode.
-/// A file without the marker at its end (trailing padding aside) is truncated. Headers
-/// that only the lenient decoder accepts (bytes between segments, which some cameras
-/// write) are decoded leniently.
+/// The marker is the one that ends the first image ([`jpeg_end`]): phones append data
+/// after it (a Samsung trailer, a motion photo's video, a second picture), which is
+/// ignored. A file that ends before it is truncated. Headers that only the lenient
+/// decoder accepts (bytes between segments, which some cameras write) are decoded
+/// leniently.
 ///
 /// A progressive JPEG (many phones and image editors write them) is decoded with its
 /// marker: after its last scan the decoder looks for the next marker and would run out
@@ -164,11 +166,7 @@ pub fn decode_rgb(bytes: &[u8], max_pixels: u64) -> Result<RgbImage, DecodeError
 /// without its missing scans (coarser, or grey where the first scan was cut), as other
 /// decoders show it; one cut with no marker is refused as any.
 fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
-    let tail = bytes.len().saturating_sub(64);
-    let end = bytes[tail..]
-        .windows(2)
-        .rposition(|w| w == [0xFF, 0xD9])
-        .map(|i| tail + i)
+    let end = jpeg_end(bytes)
         .ok_or_else(|| DecodeError::Corrupt("truncated JPEG (no end-of-image marker)".into()))?;
     let options = |strict: bool| {
         DecoderOptions::default()
@@ -188,6 +186,33 @@ fn decode_jpeg(bytes: &[u8], max_side: u32) -> Result<RgbImage, DecodeError> {
         .ok_or_else(|| DecodeError::Corrupt("no frame header".into()))?;
     RgbImage::from_raw(w as u32, h as u32, pixels)
         .ok_or_else(|| DecodeError::Corrupt("decoded size differs from the header".into()))
+}
+
+/// Offset of the end-of-image marker that ends the first image of a JPEG stream, found
+/// by walking its segments (skipped by their lengths, so a thumbnail inside the EXIF
+/// segment does not count) and its entropy-coded data (where 0xFF is followed by a
+/// stuffed zero, a restart marker or a fill byte); `None` when the data ends first.
+fn jpeg_end(bytes: &[u8]) -> Option<usize> {
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return None;
+    }
+    let mut i = 2;
+    while i + 1 < bytes.len() {
+        if bytes[i] != 0xFF {
+            // Entropy-coded data, or stray bytes between segments.
+            i += 1;
+            continue;
+        }
+        i += match bytes[i + 1] {
+            0xD9 => return Some(i),
+            // A fill byte: the marker follows.
+            0xFF => 1,
+            // A stuffed zero, a restart marker, TEM or a nested SOI: no length.
+            0x00 | 0x01 | 0xD0..=0xD8 => 2,
+            _ => 2 + u16::from_be_bytes([*bytes.get(i + 2)?, *bytes.get(i + 3)?]) as usize,
+        };
+    }
+    None
 }
 
 /// A JPEG decoder over `stream` with its headers read: strictly, or leniently where only
@@ -301,6 +326,40 @@ mod tests {
         // Cut within its scans, no marker.
         assert!(matches!(
             decode_rgb(&PROGRESSIVE[..PROGRESSIVE.len() - 300], u64::MAX),
+            Err(DecodeError::Corrupt(_))
+        ));
+    }
+
+    #[test]
+    fn data_after_the_image_is_ignored_and_a_thumbnail_does_not_end_it() {
+        let photo = RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([(x * 4) as u8, (y * 5) as u8, 90])
+        });
+        let mut jpeg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 90)
+            .encode_image(&photo)
+            .unwrap();
+        let plain = decode_rgb(&jpeg, u64::MAX).unwrap();
+        // A phone's trailer after the end marker: zeros, then bytes with markers in them.
+        let mut trailed = jpeg.clone();
+        trailed.extend(b"SEFH");
+        trailed.extend(std::iter::repeat_n(0u8, 2000));
+        trailed.extend((0..5000u32).map(|k| (k * 97 % 251) as u8));
+        trailed.extend([0xFF, 0xD9, 0x12, 0x34]);
+        assert_eq!(decode_rgb(&trailed, u64::MAX).unwrap(), plain);
+        // An APP1 segment right after SOI holding a thumbnail's end marker.
+        let payload = [b"Exif\0\0".as_slice(), &[0xFF, 0xD8, 0x00, 0xFF, 0xD9]].concat();
+        let mut app1 = vec![0xFF, 0xE1];
+        app1.extend(((payload.len() + 2) as u16).to_be_bytes());
+        app1.extend(&payload);
+        let with_thumb = [&jpeg[..2], &app1[..], &jpeg[2..]].concat();
+        assert_eq!(jpeg_end(&with_thumb), Some(with_thumb.len() - 2));
+        assert_eq!(decode_rgb(&with_thumb, u64::MAX).unwrap(), plain);
+        // Cut short, with a trailer-like tail that holds no end marker.
+        let mut cut = jpeg[..jpeg.len() / 2].to_vec();
+        cut.extend(std::iter::repeat_n(0u8, 100));
+        assert!(matches!(
+            decode_rgb(&cut, u64::MAX),
             Err(DecodeError::Corrupt(_))
         ));
     }
