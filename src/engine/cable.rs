@@ -321,16 +321,26 @@ pub(super) fn drop_cables(
 
 /// Drops the cables shorter than [`Params::field_short_widths`] nominal widths that
 /// score under [`Params::field_short_min_score`] (a field's floor for short cables:
-/// walks over photographed clutter end soon and score low); their ends are left free.
+/// walks over photographed clutter end soon and score low), and the cables between two
+/// ends shorter than [`Params::field_pair_short_widths`] that score under
+/// [`Params::field_pair_short_min_score`] (two false terminals on a texture joined);
+/// their ends are left free.
 pub(super) fn drop_short_weak(
     cables: &mut Vec<Cable>,
     end_cables: &mut [Option<usize>],
     params: &Params,
 ) {
     let short = params.field_short_widths * params.nominal_width_px;
+    let pair_short = params.field_pair_short_widths * params.nominal_width_px;
     let weak: Vec<bool> = cables
         .iter()
-        .map(|c| c.length_px < short && c.score < params.field_short_min_score)
+        .map(|c| {
+            let paired = c.end_indices.iter().all(Option::is_some);
+            (c.length_px < short && c.score < params.field_short_min_score)
+                || (paired
+                    && c.length_px < pair_short
+                    && c.score < params.field_pair_short_min_score)
+        })
         .collect();
     if weak.contains(&true) {
         drop_cables(cables, end_cables, &weak);
@@ -434,12 +444,14 @@ mod tests {
         let params = Params::default();
         let short = params.field_short_widths * params.nominal_width_px;
         let weak = params.field_short_min_score;
+        // Each from an end to a free end (the border, a lost walk): only the floor for
+        // every cable applies.
         let cable = |id: usize, length: f32, score: f32| Cable {
             score,
             ..straight(
                 id,
                 [[100.0, 100.0], [100.0 + length, 100.0]],
-                [Some(2 * id), Some(2 * id + 1)],
+                [Some(id), None],
             )
         };
         let mut cables = vec![
@@ -448,22 +460,75 @@ mod tests {
             cable(2, 0.8 * short, 2.0 * weak),
             cable(3, 0.5 * short, 0.9 * weak),
         ];
-        let mut end_cables: Vec<Option<usize>> = (0..8).map(|i| Some(i / 2)).collect();
+        let mut end_cables: Vec<Option<usize>> = (0..4).map(Some).collect();
         drop_short_weak(&mut cables, &mut end_cables, &params);
         // The long weak one and the short strong one stay, renumbered.
         let scores: Vec<f32> = cables.iter().map(|c| c.score).collect();
         assert_eq!(scores, [0.5 * weak, 2.0 * weak]);
         assert_eq!(cables.iter().map(|c| c.id).collect::<Vec<_>>(), [0, 1]);
-        assert_eq!(
-            end_cables,
-            [None, None, Some(0), Some(0), Some(1), Some(1), None, None]
-        );
+        assert_eq!(end_cables, [None, Some(0), Some(1), None]);
         let mut none = vec![cable(0, 0.5 * short, 0.0)];
         let off = Params {
             field_short_min_score: 0.0,
             ..params
         };
-        drop_short_weak(&mut none, &mut [Some(0), Some(0)], &off);
+        drop_short_weak(&mut none, &mut [Some(0)], &off);
         assert_eq!(none.len(), 1, "a floor of 0 drops nothing");
+    }
+
+    #[test]
+    fn a_short_weak_cable_between_two_ends_is_dropped_and_its_ends_freed() {
+        let params = Params::default();
+        let short = params.field_pair_short_widths * params.nominal_width_px;
+        let weak = params.field_pair_short_min_score;
+        // Longer and stronger than the floor for every cable asks.
+        assert!(0.9 * short > params.field_short_widths * params.nominal_width_px);
+        assert!(0.5 * weak > params.field_short_min_score);
+        let cable = |id: usize, length: f32, score: f32, far_end: Option<usize>| Cable {
+            score,
+            ..straight(
+                id,
+                [[100.0, 100.0], [100.0 + length, 100.0]],
+                [Some(2 * id), far_end],
+            )
+        };
+        let mut cables = vec![
+            cable(0, 0.9 * short, 0.5 * weak, Some(1)),
+            cable(1, 0.9 * short, 0.5 * weak, None),
+            cable(2, 1.1 * short, 0.5 * weak, Some(5)),
+            cable(3, 0.9 * short, 1.5 * weak, Some(7)),
+        ];
+        let mut end_cables: Vec<Option<usize>> = [0, 0, 1, 9, 2, 2, 3, 3]
+            .map(|c| (c < 4).then_some(c))
+            .to_vec();
+        drop_short_weak(&mut cables, &mut end_cables, &params);
+        // Kept: the one with a free end, the longer one, the stronger one.
+        let tenths = |v: f32| (v * 10.0).round() / 10.0;
+        let kept: Vec<(f32, f32)> = cables
+            .iter()
+            .map(|c| (tenths(c.length_px / short), tenths(c.score / weak)))
+            .collect();
+        assert_eq!(kept, [(0.9, 0.5), (1.1, 0.5), (0.9, 1.5)]);
+        assert_eq!(
+            end_cables,
+            [
+                None,
+                None,
+                Some(0),
+                None,
+                Some(1),
+                Some(1),
+                Some(2),
+                Some(2)
+            ]
+        );
+        let mut off = vec![cable(0, 0.5 * short, 0.0, Some(1))];
+        let params = Params {
+            field_pair_short_min_score: 0.0,
+            field_short_min_score: 0.0,
+            ..params
+        };
+        drop_short_weak(&mut off, &mut [Some(0), Some(0)], &params);
+        assert_eq!(off.len(), 1, "floors of 0 drop nothing");
     }
 }

@@ -383,6 +383,15 @@ pub struct Params {
     pub field_short_min_score: f32,
     /// Length below which [`Params::field_short_min_score`] applies, nominal widths.
     pub field_short_widths: f32,
+    /// With a field, the least score of a cable between two ends (both of its ends on
+    /// seeds, neither at the border) shorter than `field_pair_short_widths` nominal
+    /// widths. On a textured surface the network sees terminals at both tips of a short
+    /// stroke, and a walk joins them with a weak score; a true cable that short between
+    /// two terminals stands out from its background and scores high (docs/ENGINE.md,
+    /// "Short, weak cables"). 0: no such floor.
+    pub field_pair_short_min_score: f32,
+    /// Length below which [`Params::field_pair_short_min_score`] applies, nominal widths.
+    pub field_pair_short_widths: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
     /// (docs/ENGINE.md). 1 or more: no such seeds.
@@ -508,6 +517,8 @@ impl Default for Params {
             field_min_cable_score: 0.03,
             field_short_min_score: 0.08,
             field_short_widths: 20.0,
+            field_pair_short_min_score: 0.2,
+            field_pair_short_widths: 25.0,
             field_reached_floor: 0.7,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,
