@@ -39,10 +39,22 @@ pub enum DecodeError {
     Corrupt(String),
 }
 
-/// The format of `bytes` from its magic number, if it is one the engine reads.
+/// Major brands of an ISO base media file (its `ftyp` box) that hold a HEIF image, the
+/// format iPhones save photos in, which `image` does not recognise.
+const HEIF_BRANDS: [&[u8]; 7] = [
+    b"heic", b"heix", b"heim", b"heis", b"hevc", b"mif1", b"msf1",
+];
+
+/// The format of `bytes` from its magic number, if it is one the engine reads. A HEIF
+/// photo is named as such (refused as unsupported, not as unrecognised data).
 pub fn sniff(bytes: &[u8]) -> Result<ImageFormat, DecodeError> {
     if bytes.is_empty() {
         return Err(DecodeError::Empty);
+    }
+    if bytes.get(4..8) == Some(b"ftyp")
+        && bytes.get(8..12).is_some_and(|b| HEIF_BRANDS.contains(&b))
+    {
+        return Err(DecodeError::Unsupported("HEIF (HEIC)".into()));
     }
     match image::guess_format(bytes) {
         Ok(f @ (ImageFormat::Jpeg | ImageFormat::Png)) => Ok(f),
@@ -362,6 +374,18 @@ mod tests {
             decode_rgb(&cut, u64::MAX),
             Err(DecodeError::Corrupt(_))
         ));
+    }
+
+    #[test]
+    fn a_heif_photo_is_named_as_unsupported() {
+        let mut heic = 24u32.to_be_bytes().to_vec();
+        heic.extend(b"ftypheic\0\0\0\0mif1heic");
+        heic.extend([0; 64]);
+        assert_eq!(
+            sniff(&heic),
+            Err(DecodeError::Unsupported("HEIF (HEIC)".into()))
+        );
+        assert_eq!(sniff(&heic[..10]), Err(DecodeError::Unrecognised));
     }
 
     #[test]
