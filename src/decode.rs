@@ -315,17 +315,18 @@ mod tests {
         ));
     }
 
-    /// `tests/data/progressive.jpg`: a 160x120 gradient (red = x·255/159, green =
-    /// y·255/119, blue 128) saved as a progressive JPEG, quality 90, by Pillow
-    /// (`Image.save(..., progressive=True, optimize=True)`): SOF2 and ten scans.
+    /// `tests/data/progressive.jpg` and `restart.jpg`: a 160x120 gradient (red =
+    /// x·255/159, green = y·255/119, blue 128) saved as JPEG, quality 90, by Pillow:
+    /// progressive (`progressive=True, optimize=True`: SOF2 and ten scans), and
+    /// baseline with a restart marker after every MCU (`restart_marker_blocks=1`).
     const PROGRESSIVE: &[u8] = include_bytes!("../tests/data/progressive.jpg");
+    const RESTART: &[u8] = include_bytes!("../tests/data/restart.jpg");
 
-    #[test]
-    fn progressive_jpeg_is_decoded_and_a_cut_one_refused() {
-        let img = decode_rgb(PROGRESSIVE, u64::MAX).unwrap();
+    /// Mean absolute error, per channel, of a decoded gradient fixture.
+    fn gradient_error(jpeg: &[u8]) -> f64 {
+        let img = decode_rgb(jpeg, u64::MAX).unwrap();
         assert_eq!(img.dimensions(), (160, 120));
-        let err: f64 = img
-            .enumerate_pixels()
+        img.enumerate_pixels()
             .map(|(x, y, p)| {
                 let want = [x * 255 / 159, y * 255 / 119, 128];
                 (0..3)
@@ -333,7 +334,18 @@ mod tests {
                     .sum::<f64>()
             })
             .sum::<f64>()
-            / (160.0 * 120.0 * 3.0);
+            / (160.0 * 120.0 * 3.0)
+    }
+
+    #[test]
+    fn restart_markers_do_not_end_the_image() {
+        let err = gradient_error(RESTART);
+        assert!(err < 2.0, "mean error {err}");
+    }
+
+    #[test]
+    fn progressive_jpeg_is_decoded_and_a_cut_one_refused() {
+        let err = gradient_error(PROGRESSIVE);
         assert!(err < 2.0, "mean error {err}");
         // Cut within its scans, no marker.
         assert!(matches!(
