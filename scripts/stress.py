@@ -8,9 +8,10 @@ metal terminal; shaded (a darker rim, a lighter core), 7-11 px wide at 640x480, 
 rods 3-5 px wide with blunt ends (`thin`), pairs of same-colour cables lying side by
 side, 0-4 px apart (`pairs`), cables that loop over themselves once (`loops`, a loop
 30-70 px in radius), and one or two power cables 14-22 px wide among 2-4 wires 5-8 px
-wide (`mixed`); and cables casting soft shadows on textured surfaces (`textured`: a
-cutting mat's grid, perforated metal, cork or granite, planks, twill, tiles). One
-folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its own row:
+wide (`mixed`); cables casting soft shadows on textured surfaces (`textured`: a
+cutting mat's grid, perforated metal, cork or granite, planks, twill, tiles); and
+crowded tables (`crowded`: 6-10 cables, as many as the development photos hold, 4-10
+with a median of 7, where the other kinds draw 2-5). One folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its own row:
 
     training/.venv/bin/python scripts/stress.py /tmp/stress
     target/release/ariadne eval --dataset /tmp/stress --endpoints detect
@@ -63,6 +64,9 @@ BACKGROUNDS = {
 # textured surfaces and mixed widths (each appended, so the scenes before it stay as
 # they were).
 KINDS = list(BACKGROUNDS) + ["thin", "pairs", "loops", "textured", "mixed"]
+# Drawn after every other kind, `photo` included, so that the sets drawn before it
+# existed keep their scenes.
+LATE_KINDS = ["crowded"]
 # The `textured` kind's surfaces: a cutting mat's grid, perforated metal, cork or granite
 # speckle, wooden planks, twill fabric, tiles with grout. Drawn here with their own
 # rules, not those of training/scenes.py, so the kind tests more than the training
@@ -355,7 +359,9 @@ def scene(rng, kind):
         add_cables(rng, draw, lines, int(rng.integers(2, 5)), any_cable, (5.0, 8.0))
     if kind == "loops":
         add_cables(rng, draw, lines, int(rng.integers(1, 3)), loop_cable, (7.0, 11.0))
-    if kind == "mixed":
+    if kind == "crowded":
+        add_cables(rng, draw, lines, int(rng.integers(6, 11)), any_cable, (7.0, 11.0))
+    if kind in ("mixed", "crowded"):
         extra = 0
     elif kind in ("pairs", "loops"):
         extra = rng.integers(0, 3)
@@ -408,7 +414,7 @@ def main():
         photos = sorted(p for p in args.photos.iterdir()
                         if p.suffix.lower() in (".png", ".jpg", ".jpeg"))
     sources = []
-    for kind in KINDS + (["photo"] if photos else []):
+    for kind in KINDS + (["photo"] if photos else []) + LATE_KINDS:
         folder = args.out / kind
         folder.mkdir(parents=True, exist_ok=True)
         for i in range(2 * len(photos) if kind == "photo" else args.per_kind):
@@ -431,7 +437,8 @@ def main():
                 mask([line]).save(folder / f"{name}_mask_{k}.png")
     if sources:
         (args.out / "photo-backgrounds.tsv").write_text("".join(sources))
-    print(f"{len(KINDS) * args.per_kind + 2 * len(photos)} photos under {args.out}")
+    count = (len(KINDS) + len(LATE_KINDS)) * args.per_kind + 2 * len(photos)
+    print(f"{count} photos under {args.out}")
 
 
 if __name__ == "__main__":

@@ -677,3 +677,43 @@ fn a_cable_leaving_the_frame_at_a_grazing_angle_is_found() {
     assert_eq!(found, 1);
     assert!(err[0] < 3.0, "centreline error {:.1} px", err[0]);
 }
+
+/// A walk arrives at an end along that end's own cable. A red cable ends with its tip
+/// against the side of a dark one, leaving it at 60° to it; segmented from the true
+/// ends with no field (no direction to check against), the walks along the dark cable
+/// pass within reach of the red terminal, across the way that terminal's own walk
+/// opens, and go on to the dark cable's other end (`close_own_min_alignment`; with it
+/// at 0 they close on the red terminal and the dark cable is lost, its centreline 90
+/// px from the nearest found). The crowded stress scenes (`scripts/stress.py`,
+/// `crowded`) have many ends so placed.
+#[test]
+fn a_walk_passes_an_end_it_meets_across_that_end_s_cable() {
+    let upright = (0..=360).map(|i| [300.0, 60.0 + i as f32]).collect();
+    let slant = (0..=240)
+        .map(|i| [311.0 + 0.866 * i as f32, 200.0 + 0.5 * i as f32])
+        .collect();
+    let s = drawn(vec![(upright, [40, 40, 40]), (slant, [200, 30, 30])]);
+    let found = |own: f32| {
+        let params = Params {
+            close_own_min_alignment: own,
+            ..Params::default()
+        };
+        let seg = engine::segment(&s.image, &s.terminals(), &params).unwrap();
+        let errors: Vec<f32> = s
+            .cables
+            .iter()
+            .map(|c| {
+                seg.cables
+                    .iter()
+                    .map(|f| centreline_error(&c.centreline, &f.polyline))
+                    .fold(f32::INFINITY, f32::min)
+            })
+            .collect();
+        (seg.cables.len(), errors)
+    };
+    let (count, errors) = found(Params::default().close_own_min_alignment);
+    assert_eq!(count, 2);
+    assert!(errors.iter().all(|&e| e < 3.0), "{errors:?}");
+    let (_, errors) = found(0.0);
+    assert!(errors[0] > 20.0, "{errors:?}");
+}

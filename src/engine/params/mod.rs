@@ -107,6 +107,14 @@ pub struct Params {
     /// the head): the terminal of a cable laid alongside, within r of the walk's side,
     /// is not where the walk's cable ends (paper: no such limit).
     pub close_max_lateral_steps: f32,
+    /// A walk closes on another end only when its heading agrees at least this much
+    /// ([`crate::engine::field::alignment`] of the two directions: 1 along, 0 across)
+    /// with the way that end's own best walk opens, the end's cable as seen from the
+    /// end: an end whose tip touches another cable's side lies within reach of the
+    /// walks along that cable, which pass it across its own. Checked after all walks
+    /// are run once (an end's own walk is needed); the walks it refuses are run again
+    /// past that end. 0: no such check (paper).
+    pub close_own_min_alignment: f32,
     /// A walk that closes on another end is a cable only when it took at least this many
     /// steps past its first superpixel: one that meets an end as soon as it leaves its
     /// own has read nothing of a cable between the two (the ends of two cables lying
@@ -444,6 +452,7 @@ impl Default for Params {
             heading_span_px: 25.0,
             close_radius_px: 20.0,
             close_max_lateral_steps: 1.3,
+            close_own_min_alignment: 0.75,
             close_min_steps: 1,
             min_similarity: 0.1,
             min_contrast: 0.15,
@@ -551,7 +560,7 @@ impl Params {
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
     /// refinement on the image, no seed regions, no limit on how far beside a walk an
-    /// end it closes on may lie, no brightening of a dim photo or
+    /// end it closes on may lie or on the way it arrives there, no brightening of a dim photo or
     /// sharpening of a soft one, no second pass at another scale for cables wider or
     /// thinner than nominal, masks as wide as the walk's superpixels, no weaker
     /// terminal peaks reported where a cable ends — with the paper's
@@ -573,6 +582,7 @@ impl Params {
             mask_width_px: 0.0,
             seed_region_steps: 0.0,
             close_max_lateral_steps: 100.0,
+            close_own_min_alignment: 0.0,
             close_min_steps: 0,
             closed_min_length_px: 0.0,
             exposure_max_gain: 1.0,

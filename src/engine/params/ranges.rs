@@ -111,6 +111,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_recolour_steps", 0.0, 100.0),
     ("field_collar_head", 0.0, 1.0),
     ("field_close_min_alignment", 0.0, 1.0),
+    ("close_own_min_alignment", 0.0, 1.0),
     ("field_through_factor", 0.0, 1.0),
     ("field_opening_weight", 0.0, 1.0),
     ("quality_field_exponent", 0.0, 10.0),

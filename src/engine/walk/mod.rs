@@ -47,7 +47,11 @@
 //! `field_close_min_alignment`, so a walk passing the tip of another cable that ends
 //! against its side goes on, and not where the seed lies more than a cable width beside
 //! the walk's line while the field shows the walk's cable running on past it, so a
-//! walk passing a terminal that lies beside its cable goes on), on leaving the frame,
+//! walk passing a terminal that lies beside its cable goes on; and, once every walk has
+//! run, only when its heading agrees with the way that seed's own best walk opens by at
+//! least `close_own_min_alignment`, so a walk along a cable that another cable's
+//! terminal touches passes that terminal, and is run again if it closed there), on
+//! leaving the frame,
 //! when the best candidate's colour no longer matches the model (it left the cable) or
 //! at the iteration cap. Each walk records the evidence pairing needs: mean colour
 //! agreement, smoothness, and how much its vertices stand out from their sides (a cable
@@ -163,7 +167,9 @@ pub struct Terrain<'a> {
 /// Runs all walks from all seeds; a walk may end at any of the first `targets` seeds
 /// but its own (the rest only start walks); `from_ends` says whether the seeds are
 /// cable ends, for which [`Walk::through`] and [`Walk::opening`] are read (false
-/// leaves them false and 1: border seeds and the ends of pieces of the field).
+/// leaves them false and 1: border seeds and the ends of pieces of the field). For
+/// cable ends, a walk that closed on an end it arrived at across that end's own cable
+/// (`close_own_min_alignment`) is run again, going on past it.
 pub fn walk_all(
     terrain: Terrain<'_>,
     seeds: &[Seed],
@@ -175,12 +181,33 @@ pub fn walk_all(
     let mut walker = Walker::new(terrain, seeds, targets);
     let mut walks = Vec::new();
     let near_px = terrain.params.seed_region_steps * terrain.step_px;
-    for (s, seed) in seeds.iter().enumerate() {
-        let (region, firsts) = seed_region(graph, seed, near_px);
-        for first in firsts {
+    let regions: Vec<(Vec<u32>, Vec<u32>)> = seeds
+        .iter()
+        .map(|seed| seed_region(graph, seed, near_px))
+        .collect();
+    for (s, (region, firsts)) in regions.iter().enumerate() {
+        for &first in firsts {
             deadline.check()?;
-            if let Some(w) = walker.run(s, &region, first, from_ends) {
+            if let Some(w) = walker.run(s, region, first, from_ends) {
                 walks.push(w);
+            }
+        }
+    }
+    if from_ends && terrain.params.close_own_min_alignment > 0.0 {
+        walker.own = (0..targets)
+            .map(|t| walker.own_heading(t, &walks))
+            .collect();
+        for w in &mut walks {
+            let across = match w.end {
+                WalkEnd::Seed(t) => !walker.arrives_along_own(t, w.end_heading),
+                _ => false,
+            };
+            if across {
+                deadline.check()?;
+                let (s, first) = (w.seed, w.vertices[1]);
+                if let Some(again) = walker.run(s, &regions[s].0, first, from_ends) {
+                    *w = again;
+                }
             }
         }
     }
@@ -276,6 +303,9 @@ struct Walker<'a> {
     walk_id: u32,
     model: Vec<f32>,
     cos_max_turn: f32,
+    /// Per target seed, the unit direction its own cable leaves it along
+    /// ([`Walker::own_heading`]), once every walk has run; empty before.
+    own: Vec<Option<[f32; 2]>>,
 }
 
 impl<'a> Walker<'a> {
@@ -304,7 +334,34 @@ impl<'a> Walker<'a> {
             walk_id: 0,
             model: vec![0.0; graph.histogram_cells()],
             cos_max_turn: params.max_turn_deg.to_radians().cos(),
+            own: Vec::new(),
         }
+    }
+
+    /// The unit direction in which seed `t`'s own cable leaves it: how its best walk
+    /// among `walks` opens ([`Self::opening_direction`]), by quality, of those along a
+    /// cable that stops at the seed (not [`Walk::through`]) that reach as far as the
+    /// opening is read (`OPENING_STEPS` superpixel steps: a walk lost a step from its
+    /// seed scored no step, and its quality of 1 says nothing); `None` when it has none.
+    fn own_heading(&self, t: usize, walks: &[Walk]) -> Option<[f32; 2]> {
+        let p = self.params;
+        let reach = OPENING_STEPS * self.side_px;
+        let best = walks
+            .iter()
+            .filter(|w| w.seed == t && !w.through && w.length_px >= reach)
+            .max_by(|a, b| a.quality(p).total_cmp(&b.quality(p)))?;
+        let points: Vec<[f32; 2]> = best.vertices[1..].iter().map(|&v| self.pos(v)).collect();
+        self.opening_direction(self.seeds[t].point, &points)
+    }
+
+    /// Whether a walk heading along `dir` arrives at seed `t` along the cable that
+    /// leaves `t` ([`Self::own`]; any heading before that is known, or where seed `t`
+    /// has no walk).
+    fn arrives_along_own(&self, t: usize, dir: [f32; 2]) -> bool {
+        self.own.get(t).copied().flatten().is_none_or(|u| {
+            let along = [u[0] * u[0] - u[1] * u[1], 2.0 * u[0] * u[1]];
+            alignment(dir, along) >= self.params.close_own_min_alignment
+        })
     }
 
     fn pos(&self, v: u32) -> [f32; 2] {
@@ -592,7 +649,8 @@ impl<'a> Walker<'a> {
     /// Whether a walk whose head is at `here`, heading along `dir`, arrives at seed `t`
     /// (within reach): the seed lies on the walk's line, not beside it (the terminal of
     /// a cable laid alongside), and the walk runs along the cable the field sees there
-    /// (a terminal pushed against the walk's side belongs to a cable across it).
+    /// (a terminal pushed against the walk's side belongs to a cable across it) and
+    /// along the seed's own cable ([`Self::arrives_along_own`]).
     fn arrives_at(&self, t: usize, here: [f32; 2], dir: [f32; 2]) -> bool {
         let p = self.params;
         let at = self.seeds[t].point;
@@ -602,6 +660,7 @@ impl<'a> Walker<'a> {
             && self.field_map.is_none_or(|f| {
                 alignment(dir, f.orientation_at(at[0], at[1])) >= p.field_close_min_alignment
             })
+            && self.arrives_along_own(t, dir)
     }
 
     /// How a walk that found no acceptable next vertex ends: on a seed just ahead (the
@@ -620,7 +679,8 @@ impl<'a> Walker<'a> {
                 let v = [seed.point[0] - here[0], seed.point[1] - here[1]];
                 let d = norm(v);
                 let cos = (v[0] * dir[0] + v[1] * dir[1]) / d.max(1e-6);
-                (d <= reach && cos >= self.cos_max_turn).then_some((t, d))
+                (d <= reach && cos >= self.cos_max_turn && self.arrives_along_own(t, dir))
+                    .then_some((t, d))
             })
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((t, _)) = ahead {
