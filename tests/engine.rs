@@ -438,8 +438,14 @@ fn with_field_and(
     params: &Params,
 ) -> (usize, Vec<f32>) {
     let seg = segment_trusting(s, ends, field, params);
-    let err: Vec<f32> = s
-        .cables
+    let err = errors_against(s, &seg);
+    eprintln!("{} cables, centreline errors {err:?}", seg.cables.len());
+    (seg.cables.len(), err)
+}
+
+/// Each true cable of `s`'s centreline error to the nearest cable `seg` found.
+fn errors_against(s: &ariadne_dlo::synth::Scene, seg: &engine::Segmentation) -> Vec<f32> {
+    s.cables
         .iter()
         .map(|c| {
             seg.cables
@@ -447,9 +453,7 @@ fn with_field_and(
                 .map(|f| centreline_error(&c.centreline, &f.polyline))
                 .fold(f32::MAX, f32::min)
         })
-        .collect();
-    eprintln!("{} cables, centreline errors {err:?}", seg.cables.len());
-    (seg.cables.len(), err)
+        .collect()
 }
 
 /// Cables whose ends the network missed are found from the field alone: with an exact
@@ -699,17 +703,7 @@ fn a_walk_passes_an_end_it_meets_across_that_end_s_cable() {
             ..Params::default()
         };
         let seg = engine::segment(&s.image, &s.terminals(), &params).unwrap();
-        let errors: Vec<f32> = s
-            .cables
-            .iter()
-            .map(|c| {
-                seg.cables
-                    .iter()
-                    .map(|f| centreline_error(&c.centreline, &f.polyline))
-                    .fold(f32::INFINITY, f32::min)
-            })
-            .collect();
-        (seg.cables.len(), errors)
+        (seg.cables.len(), errors_against(&s, &seg))
     };
     let (count, errors) = found(Params::default().close_own_min_alignment);
     assert_eq!(count, 2);
