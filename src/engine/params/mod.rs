@@ -111,9 +111,10 @@ pub struct Params {
     /// ([`crate::engine::field::alignment`] of the two directions: 1 along, 0 across)
     /// with the way that end's own best walk opens, the end's cable as seen from the
     /// end: an end whose tip touches another cable's side lies within reach of the
-    /// walks along that cable, which pass it across its own. Checked after all walks
-    /// are run once (an end's own walk is needed); the walks it refuses are run again
-    /// past that end. 0: no such check (paper).
+    /// walks along that cable, which pass it across its own (0.75: within 30°; session
+    /// 67, docs/ENGINE.md). Checked after all walks are run once (an end's own walk is
+    /// needed); the walks it refuses are run again past that end. 0: no such check
+    /// (paper).
     pub close_own_min_alignment: f32,
     /// A walk that closes on another end is a cable only when it took at least this many
     /// steps past its first superpixel: one that meets an end as soon as it leaves its
@@ -560,8 +561,8 @@ impl Params {
     /// The method as published (README, "The `paper` preset"): colour, curvature and
     /// distance only — no cable field, no lateral contrast, no border seeds, no
     /// refinement on the image, no seed regions, no limit on how far beside a walk an
-    /// end it closes on may lie or on the way it arrives there, no brightening of a dim photo or
-    /// sharpening of a soft one, no second pass at another scale for cables wider or
+    /// end it closes on may lie or on the way it arrives there, no brightening of a dim
+    /// photo or sharpening of a soft one, no second pass at another scale for cables wider or
     /// thinner than nominal, masks as wide as the walk's superpixels, no weaker
     /// terminal peaks reported where a cable ends — with the paper's
     /// and its authors' code's constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on
