@@ -135,6 +135,13 @@ SLEEVES = 0.0
 # soft and tightly curved; a cable is none of these.
 LINE_TEXTURES = 0.0
 
+# Chance that a procedural cable drawn after another ends against it (train_field.py's
+# `--abutting`): its tip on, or just beside, a cable already drawn, as where cables lie
+# in a heap. The development photos have no terminal within 20 px of another cable, so
+# the network learnt ends only on free ground (models/README.md, "Ends against other
+# cables").
+ABUTTING = 0.0
+
 
 def option_drawn(rng: random.Random, share: float) -> bool:
     """True with probability `share`, for an option that is off by default: at 0 it
@@ -334,9 +341,11 @@ def random_path(rng: random.Random, h=IN_H, w=IN_W) -> np.ndarray:
 
 
 def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, width=None,
-               terminals_p=0.7):
+               terminals_p=0.7, tipped=()):
     """Draws a shaded cable with a darker rim along `path` (input px), supersampled 2x,
-    updating the mask, centrelines and terminals."""
+    updating the mask, centrelines and terminals. Ends in view get a metal terminal
+    with chance `terminals_p`, those listed in `tipped` (0: the start, 1: the last
+    point) always."""
     h, w = scene.mask.shape
     ss = 2
     width = width if width is not None else rng.uniform(2.5, 8.0)
@@ -364,7 +373,7 @@ def draw_cable(scene: Scene, path: np.ndarray, rng: random.Random, colour=None, 
         ends.append((float(end[0]), float(end[1])))
         if option_drawn(rng, SLEEVES):
             draw_sleeve(dl, da, path, i == 0, wpx, ss, rng)
-        if rng.random() < terminals_p:  # a metal terminal beyond the insulation
+        if rng.random() < terminals_p or i in tipped:  # metal beyond the insulation
             d = end - prev
             d = d / (np.linalg.norm(d) + 1e-9)
             tip = (end + d * rng.uniform(5, 15)) * ss
@@ -425,15 +434,38 @@ def colour_along(rgb: np.ndarray, path: np.ndarray) -> np.ndarray:
     return np.median(rgb[xy[:, 1], xy[:, 0]], axis=0)
 
 
+def abut(path: np.ndarray, width: float, lines: list, rng: random.Random):
+    """`path` moved so that its last point lies against one of `lines` at a random
+    point in the frame: on it, or beside it by up to 1.5 widths, arriving across it at
+    any angle (either end of `path`, at random); None if that line is out of view."""
+    h, w = IN_H, IN_W
+    other = rng.choice(lines)
+    inside = [p for p in other if 8 <= p[0] <= w - 9 and 8 <= p[1] <= h - 9]
+    if not inside:
+        return None
+    anchor = inside[rng.randrange(len(inside))]
+    if rng.random() < 0.5:
+        path = path[::-1]
+    side = np.array([rng.gauss(0, 1), rng.gauss(0, 1)])
+    side *= rng.uniform(0, 1.5) * width / (np.linalg.norm(side) + 1e-9)
+    return path + (anchor + side - path[-1])
+
+
 def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
     """Draws `count` procedural cables; with `camouflage` the first wears the colour of
-    the background it lies on."""
+    the background it lies on; with chance `ABUTTING` each ends against a cable already
+    in the scene."""
     for k in range(count):
         path = random_path(rng)
         colour, width = random_colour(rng), rng.uniform(2.5, 8.0)
+        tipped = ()
+        if scene.lines and option_drawn(rng, ABUTTING):
+            moved = abut(path, width, scene.lines, rng)
+            if moved is not None:
+                path, tipped = moved, (1,)
         if camouflage and k == 0:
             colour = near_colour(rng, colour_along(scene.rgb, path))
-        draw_cable(scene, path, rng, colour, width)
+        draw_cable(scene, path, rng, colour, width, tipped=tipped)
         if rng.random() < 0.25:  # a twin of the same colour alongside
             t = np.gradient(path, axis=0)
             n = np.stack([-t[:, 1], t[:, 0]], 1)

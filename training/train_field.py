@@ -273,6 +273,9 @@ def main():
     ap.add_argument("--line-textures", type=float, default=0.0,
                     help="share of procedural backgrounds drawn with lines that are not "
                          "cables (masonry, tiles, handwriting)")
+    ap.add_argument("--abutting", type=float, default=0.0,
+                    help="chance that a procedural cable drawn after another ends "
+                         "against it")
     ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--end-weight", type=float, default=1.0,
                     help="weight of the terminal heatmap's loss against the rest")
@@ -290,6 +293,7 @@ def main():
     scenes.CAMOUFLAGE = args.camouflage
     scenes.SLEEVES = args.sleeves
     scenes.LINE_TEXTURES = args.line_textures
+    scenes.ABUTTING = args.abutting
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     np.random.seed(args.seed)

@@ -2,23 +2,22 @@
 //! cable found from the other ends stops inside the frame, is that cable's end. On a
 //! background the network never saw it is less sure of the terminals it does see
 //! (docs/ACCURACY.md, "Ends a cable confirms"); walking from every weak peak would
-//! start false cables, but a cable that stops on one confirms it. Not a peak on another
-//! cable: where one cable passes under another the network sees a weak end, and a walk
-//! that lost its cable there stops on it.
+//! start false cables, but a cable that stops on one confirms it. That includes a peak
+//! lying on another cable: in a heap, ends lie against and over other cables, and the
+//! network is least sure of those (docs/ACCURACY.md, "Ends against other cables").
 
+use super::Segmentation;
 use super::geometry::{border_inset, dist};
-use super::{Cable, Segmentation};
 
 impl Segmentation {
     /// Reports `candidates` (weaker terminal peaks, pixels of this segmentation) as
     /// ends of the cables that stop on them. Each cable end that is no given end takes
-    /// the nearest candidate within `reach_px` that lies on no other cable (within its
-    /// width of its centreline), both farther than `margin_px` from the frame's border
-    /// (a cable that stops there leaves the frame); each candidate ends at most one
-    /// cable, nearest pairs first. Every candidate taken becomes a new end, numbered
-    /// after the given ones in the order returned (indices into `candidates`), and is
-    /// recorded in [`Segmentation::end_cables`] and its cable's `end_indices`. A reach
-    /// of 0 takes none.
+    /// the nearest candidate within `reach_px`, both farther than `margin_px` from the
+    /// frame's border (a cable that stops there leaves the frame); each candidate ends
+    /// at most one cable, nearest pairs first. Every candidate taken becomes a new end,
+    /// numbered after the given ones in the order returned (indices into `candidates`),
+    /// and is recorded in [`Segmentation::end_cables`] and its cable's `end_indices`. A
+    /// reach of 0 takes none.
     pub fn confirm_ends(
         &mut self,
         candidates: &[[f64; 2]],
@@ -31,16 +30,6 @@ impl Segmentation {
         let [w, h] = [self.width, self.height].map(|v| v as usize);
         let inside = |p: [f32; 2]| border_inset(p, w, h) > margin_px;
         let points: Vec<[f32; 2]> = candidates.iter().map(|q| q.map(|v| v as f32)).collect();
-        // For each candidate, the cables it lies on.
-        let on: Vec<Vec<usize>> = points
-            .iter()
-            .map(|&q| {
-                let near = |c: &Cable| c.polyline.iter().any(|&p| dist(p, q) <= c.width_px);
-                (0..self.cables.len())
-                    .filter(|&c| near(&self.cables[c]))
-                    .collect()
-            })
-            .collect();
         let mut pairs: Vec<(f32, usize, usize, usize)> = Vec::new();
         for (c, cable) in self.cables.iter().enumerate() {
             for k in 0..2 {
@@ -50,7 +39,7 @@ impl Segmentation {
                 }
                 for (i, &q) in points.iter().enumerate() {
                     let d = dist(end, q);
-                    if d <= reach_px && inside(q) && on[i].iter().all(|&o| o == c) {
+                    if d <= reach_px && inside(q) {
                         pairs.push((d, c, k, i));
                     }
                 }
@@ -102,7 +91,7 @@ mod tests {
     fn a_free_end_inside_the_frame_takes_the_nearest_weak_peak() {
         // Cable 0 runs from given end 0 to a free end at (300, 200); cable 1 from
         // given end 1 out of the frame at (0, 240); cable 2 from a free end at
-        // (400, 300), where it passes under cable 3, to given end 2; cable 4 from
+        // (400, 300), where it ends against cable 3, to given end 2; cable 4 from
         // given end 5 to a free end 20 px from the frame's left side.
         let mut seg = found(
             1.0,
@@ -120,14 +109,14 @@ mod tests {
             [305.0, 203.0], // 5.8 px: the nearer one is taken
             [4.0, 240.0],   // by cable 1's end, but that leaves the frame
             [100.0, 104.0], // by a given end: not taken
-            [400.0, 292.0], // by cable 2's free end, but on cable 3
+            [400.0, 292.0], // 8 px from cable 2's free end, lying on cable 3
             [9.0, 440.0],   // by cable 4's free end, but at the border
         ];
         let taken = seg.confirm_ends(&candidates, 12.0, 12.0);
-        assert_eq!(taken, vec![1]);
-        assert_eq!(seg.end_cables[6..], [Some(0)]);
+        assert_eq!(taken, vec![1, 4]);
+        assert_eq!(seg.end_cables[6..], [Some(0), Some(2)]);
         assert_eq!(seg.cables[0].end_indices, [Some(0), Some(6)]);
-        assert_eq!(seg.cables[2].end_indices, [None, Some(2)]);
+        assert_eq!(seg.cables[2].end_indices, [Some(7), Some(2)]);
         assert_eq!(seg.cables[4].end_indices, [Some(5), None]);
         assert_eq!(seg.cables[1].end_indices, [Some(1), None]);
         // A confirmed end takes no other peak, and a reach of 0 takes none.
