@@ -181,8 +181,14 @@ const SAMPLE_STRIDE: usize = 2;
 /// (cos 2θ, sin 2θ) with confidence = its length: 1 along it, 0 across it, and 1/2
 /// (no opinion) where the field has none.
 pub fn alignment(dir: [f32; 2], orientation: [f32; 2]) -> f32 {
-    let (c2, s2) = (dir[0] * dir[0] - dir[1] * dir[1], 2.0 * dir[0] * dir[1]);
+    let [c2, s2] = orientation_of(dir);
     (0.5 * (1.0 + c2 * orientation[0] + s2 * orientation[1])).clamp(0.0, 1.0)
+}
+
+/// The unsigned direction of the unit vector `dir` as the field gives one: (cos 2θ,
+/// sin 2θ), of length 1.
+pub fn orientation_of(dir: [f32; 2]) -> [f32; 2] {
+    [dir[0] * dir[0] - dir[1] * dir[1], 2.0 * dir[0] * dir[1]]
 }
 
 #[cfg(test)]

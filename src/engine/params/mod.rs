@@ -562,8 +562,8 @@ impl Params {
     /// distance only — no cable field, no lateral contrast, no border seeds, no
     /// refinement on the image, no seed regions, no limit on how far beside a walk an
     /// end it closes on may lie or on the way it arrives there, no brightening of a dim
-    /// photo or sharpening of a soft one, no second pass at another scale for cables wider or
-    /// thinner than nominal, masks as wide as the walk's superpixels, no weaker
+    /// photo or sharpening of a soft one, no second pass at another scale for cables
+    /// wider or thinner than nominal, masks as wide as the walk's superpixels, no weaker
     /// terminal peaks reported where a cable ends — with the paper's
     /// and its authors' code's constants (8 histogram bins, c_V = c_D = 0.5, κ = 1 on
     /// the newest turn, turns up to 90°, 100 steps). What the paper leaves open stays

@@ -60,7 +60,7 @@
 mod step;
 
 use super::color::LabImage;
-use super::field::{CableField, GAP_SAMPLE_PX, VertexField, alignment};
+use super::field::{CableField, GAP_SAMPLE_PX, VertexField, alignment, orientation_of};
 use super::geometry::{border_exit, dist, dist3, heading, norm};
 use super::graph::{Graph, Neighbourhood};
 use super::{Deadline, EngineError, Params};
@@ -359,8 +359,7 @@ impl<'a> Walker<'a> {
     /// has no walk).
     fn arrives_along_own(&self, t: usize, dir: [f32; 2]) -> bool {
         self.own.get(t).copied().flatten().is_none_or(|u| {
-            let along = [u[0] * u[0] - u[1] * u[1], 2.0 * u[0] * u[1]];
-            alignment(dir, along) >= self.params.close_own_min_alignment
+            alignment(dir, orientation_of(u)) >= self.params.close_own_min_alignment
         })
     }
 
