@@ -143,6 +143,39 @@ LINE_TEXTURES = 0.0
 ABUTTING = 0.0
 
 
+# Share of procedural backgrounds that are a crop of a photograph (train_field.py's
+# `--photo-textures`, with `--background-photos DIR`): real surfaces, objects and their
+# edges, none of them a cable. `BACKGROUND_PHOTOS` holds the photographs, RGB arrays.
+PHOTO_TEXTURES = 0.0
+BACKGROUND_PHOTOS: list[np.ndarray] = []
+
+
+def load_background_photos(folder: Path) -> list[np.ndarray]:
+    """Every JPEG and PNG photograph in `folder`, as RGB arrays, in name order."""
+    files = sorted(f for f in folder.iterdir() if f.suffix.lower() in (".jpg", ".png"))
+    return [np.asarray(Image.open(f).convert("RGB")) for f in files]
+
+
+def photo_crop(rng: random.Random, h: int, w: int) -> np.ndarray:
+    """A crop of one of `BACKGROUND_PHOTOS`, from a third of the photograph's extent
+    to all of it, flipped or turned at random, resized to `w` x `h`; grey at times."""
+    src = rng.choice(BACKGROUND_PHOTOS)
+    if rng.random() < 0.5:
+        src = np.rot90(src)
+    sh, sw = src.shape[:2]
+    fit = min(sh / h, sw / w)
+    s = fit * rng.uniform(0.33, 1.0)
+    ch, cw = max(2, int(h * s)), max(2, int(w * s))
+    y, x = rng.randrange(sh - ch + 1), rng.randrange(sw - cw + 1)
+    crop = Image.fromarray(np.ascontiguousarray(src[y:y + ch, x:x + cw]))
+    img = np.asarray(crop.resize((w, h), Image.BILINEAR), np.float32)
+    if rng.random() < 0.5:
+        img = img[:, ::-1]
+    if rng.random() < 0.25:
+        img = np.repeat(img.mean(axis=2, keepdims=True), 3, axis=2)
+    return np.ascontiguousarray(img)
+
+
 def option_drawn(rng: random.Random, share: float) -> bool:
     """True with probability `share`, for an option that is off by default: at 0 it
     draws no random number, so the recipe's scenes stay those the bundled model saw
@@ -157,7 +190,12 @@ def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
              "clutter", "clutter"]
     if RICH_TEXTURES:
         kinds += ["mosaic", "mosaic", "drips", "drips"]
-    kind = "lines" if option_drawn(rng, LINE_TEXTURES) else rng.choice(kinds)
+    if option_drawn(rng, LINE_TEXTURES):
+        kind = "lines"
+    elif option_drawn(rng, PHOTO_TEXTURES):
+        kind = "photo"
+    else:
+        kind = rng.choice(kinds)
     base = random_colour(rng) if base is None else base
     img = np.ones((h, w, 3), np.float32) * base
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -211,6 +249,8 @@ def background(rng: random.Random, h=IN_H, w=IN_W, base=None) -> np.ndarray:
         img = np.asarray(pil, np.float32)
     elif kind == "lines":
         img = masonry(rng, nrng, base) if rng.random() < 0.6 else handwriting(rng, nrng, img)
+    elif kind == "photo":
+        img = photo_crop(rng, h, w)
     if kind == "clutter" or rng.random() < 0.25:
         img = clutter(rng, img)
     if rng.random() < 0.35:  # shadows and uneven light

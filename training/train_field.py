@@ -276,6 +276,12 @@ def main():
     ap.add_argument("--abutting", type=float, default=0.0,
                     help="chance that a procedural cable drawn after another ends "
                          "against it")
+    ap.add_argument("--photo-textures", type=float, default=0.0,
+                    help="share of procedural backgrounds cropped from --background-photos "
+                         "(0: none, and no random number drawn)")
+    ap.add_argument("--background-photos", type=Path,
+                    help="folder of photographs for --photo-textures "
+                         "(training/fetch_background_photos.sh)")
     ap.add_argument("--holdout", choices=GROUPS)
     ap.add_argument("--end-weight", type=float, default=1.0,
                     help="weight of the terminal heatmap's loss against the rest")
@@ -294,6 +300,11 @@ def main():
     scenes.SLEEVES = args.sleeves
     scenes.LINE_TEXTURES = args.line_textures
     scenes.ABUTTING = args.abutting
+    scenes.PHOTO_TEXTURES = args.photo_textures
+    if args.photo_textures > 0:
+        if args.background_photos is None:
+            ap.error("--photo-textures needs --background-photos")
+        scenes.BACKGROUND_PHOTOS = scenes.load_background_photos(args.background_photos)
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
     np.random.seed(args.seed)
@@ -356,7 +367,7 @@ def main():
     model.cpu()
     export_onnx(model, out)
     torch.save(model.state_dict(), out.with_suffix(".pt"))
-    out.with_suffix(".train.json").write_text(json.dumps(report, indent=2) + "\n")
+    out.with_suffix(".train.json").write_text(json.dumps(report, indent=2, default=str) + "\n")
     print(json.dumps({"train": report["train"], "held_out": report["held_out"]}), flush=True)
     print(f"wrote {out}")
 
