@@ -12,10 +12,13 @@ grid of stride 4 (8 photo px per cell), six channels:
 
 Training scenes (training/scenes.py) mix the development photos, their cables composed
 onto procedural backgrounds, and procedurally drawn cables, with heavy photometric
-augmentation. Run from the repository root (see models/cable_field.md):
+augmentation. Run from the repository root (see models/README.md, the model card):
 
     python training/train_field.py --out models/cable_field.onnx              # all photos
     python training/train_field.py --holdout wood --out out/field-wood.onnx  # one fold
+
+The bundled network's exact recipe is `make train-field` (it adds `--line-textures 0.15`);
+`make lobo` trains its folds.
 
 The network (`--backbone lite0`, the default) is EfficientNet-Lite0's first stages with
 ImageNet weights and a small decoder (training/backbone.py); `--backbone none` is the
