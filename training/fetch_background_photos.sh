@@ -5,8 +5,9 @@
 #   scikit-learn: china (a temple), flower
 #   matplotlib:   grace_hopper (a portrait)
 # None of them is one of the photographs scripts/stress.py draws its `photo` kind on.
-# The wheels' versions are pinned and the photographs' checksums verified, so that the
-# recipe's scenes stay those the bundled model saw (`make scene-check`).
+# The wheels' versions are pinned and the photographs' checksums verified, so that a
+# run with --photo-textures makes the scenes of the networks the model card measured
+# (models/README.md, "Photographs among the backgrounds"; not the bundled recipe).
 # Usage: training/fetch_background_photos.sh [OUT_DIR]   (default out/background-photos)
 set -euo pipefail
 out=${1:-out/background-photos}
