@@ -249,6 +249,25 @@ def export_onnx(model: nn.Module, out: Path):
                       opset_version=17, dynamo=False)
 
 
+# The scene options that are a share or a chance, off (0) by default: each flag, the
+# `training/scenes.py` setting it sets, and its help. Off, an option draws no random
+# number (`scenes.option_drawn`).
+SCENE_SHARES = (
+    ("--camouflage", "CAMOUFLAGE",
+     "share of composed and procedural scenes where one cable wears the background's colour"),
+    ("--sleeves", "SLEEVES",
+     "chance that a procedural cable's end wears an insulated sleeve (ferrule or crimp "
+     "barrel) of its own colour"),
+    ("--line-textures", "LINE_TEXTURES",
+     "share of procedural backgrounds drawn with lines that are not cables (masonry, "
+     "tiles, handwriting)"),
+    ("--abutting", "ABUTTING",
+     "chance that a procedural cable drawn after another ends against it"),
+    ("--photo-textures", "PHOTO_TEXTURES",
+     "share of procedural backgrounds cropped from --background-photos"),
+)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=2000)
@@ -267,21 +286,8 @@ def main():
     ap.add_argument("--rich-textures", action=argparse.BooleanOptionalAction, default=True,
                     help="also mosaic and drip-painting backgrounds (the bundled recipe; "
                          "--no-rich-textures leaves them out)")
-    ap.add_argument("--camouflage", type=float, default=0.0,
-                    help="share of composed and procedural scenes where one cable wears "
-                         "the background's colour")
-    ap.add_argument("--sleeves", type=float, default=0.0,
-                    help="chance that a procedural cable's end wears an insulated sleeve "
-                         "(ferrule or crimp barrel) of its own colour")
-    ap.add_argument("--line-textures", type=float, default=0.0,
-                    help="share of procedural backgrounds drawn with lines that are not "
-                         "cables (masonry, tiles, handwriting)")
-    ap.add_argument("--abutting", type=float, default=0.0,
-                    help="chance that a procedural cable drawn after another ends "
-                         "against it")
-    ap.add_argument("--photo-textures", type=float, default=0.0,
-                    help="share of procedural backgrounds cropped from --background-photos "
-                         "(0: none, and no random number drawn)")
+    for flag, _, text in SCENE_SHARES:
+        ap.add_argument(flag, type=float, default=0.0, help=text)
     ap.add_argument("--background-photos", type=Path,
                     help="folder of photographs for --photo-textures "
                          "(training/fetch_background_photos.sh)")
@@ -299,11 +305,8 @@ def main():
     args = ap.parse_args()
 
     scenes.RICH_TEXTURES = args.rich_textures
-    scenes.CAMOUFLAGE = args.camouflage
-    scenes.SLEEVES = args.sleeves
-    scenes.LINE_TEXTURES = args.line_textures
-    scenes.ABUTTING = args.abutting
-    scenes.PHOTO_TEXTURES = args.photo_textures
+    for flag, name, _ in SCENE_SHARES:
+        setattr(scenes, name, getattr(args, flag[2:].replace("-", "_")))
     if args.photo_textures > 0:
         if args.background_photos is None:
             ap.error("--photo-textures needs --background-photos")
