@@ -1,5 +1,5 @@
 # The two commands: `make run` serves on the bundled defaults; `make test` runs everything.
-.PHONY: setup run test lint bench eval eval-detect stress lobo train-field scene-check openapi deploy-check browser-test
+.PHONY: setup run test lint bench eval eval-detect stress lobo train-field quantize-field calibration scene-check openapi deploy-check browser-test
 
 # ONNX Runtime's shared library, from the PyPI wheel, into .ort/ (idempotent).
 setup:
@@ -37,19 +37,32 @@ stress: setup
 	cargo run --release -- eval --dataset out/stress --endpoints detect
 	cargo run --release -- eval --dataset out/stress --endpoints gt
 
-# Leave-one-background-out: train one network per held-out group (out/field-GROUP.onnx,
-# about 15-20 minutes each on 2 cores), then score each on its held-out photos.
-lobo: setup
+# Leave-one-background-out: train one network per held-out group (out/field-GROUP-fp32.onnx,
+# about 15-20 minutes each on 2 cores), quantize it as the bundled one
+# (out/field-GROUP.onnx), then score each on its held-out photos.
+lobo: setup calibration
 	for g in white wood blue hard; do \
-	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --holdout $$g --out out/field-$$g.onnx; \
+	  training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --holdout $$g --out out/field-$$g-fp32.onnx; \
+	  training/.venv/bin/python training/quantize_field.py out/field-$$g-fp32.onnx out/field-$$g.onnx --calibration out/calibration; \
 	done
 	cargo build --release
 	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints detect
 	python3 scripts/lobo.py --binary $${CARGO_TARGET_DIR:-target}/release/ariadne --endpoints gt
 
-# The bundled model (about 15-20 minutes on 2 cores); see models/README.md.
+# The bundled model (about 15-20 minutes on 2 cores), trained in float, then quantized;
+# see models/README.md.
 train-field:
-	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --out models/cable_field.onnx
+	training/.venv/bin/python training/train_field.py --backbone lite0 --rich-textures --line-textures 0.15 --steps 2000 --out models/cable_field_fp32.onnx
+	$(MAKE) quantize-field
+
+# The service's network: the float one with 8-bit weights and activations (a minute).
+quantize-field: calibration
+	training/.venv/bin/python training/quantize_field.py models/cable_field_fp32.onnx models/cable_field.onnx --calibration out/calibration
+
+# Drawn scenes that set the quantized networks' activation ranges (a seed no
+# evaluation uses).
+calibration:
+	training/.venv/bin/python scripts/stress.py out/calibration --seed 40 --per-kind 4
 
 # The training scenes are still those the bundled model saw (models/README.md).
 scene-check:

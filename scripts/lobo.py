@@ -2,12 +2,13 @@
 """Leave-one-background-out figures from `ariadne eval --json` runs.
 
 For each background group (white, wood, blue: simple/ by photo number; hard: hard/),
-runs `ariadne eval` with the model trained without that group (out/field-GROUP.onnx,
-made by training/train_field.py --holdout GROUP) and reports, on that group's photos
-only: weighted IoU (the paper's metric), cable recall, terminal recall and precision;
-with the network's ends, also what lies near the missed terminals (an end found a
-little too far away, the image border, nothing) and near the false ends (a terminal a
-little too far away, the border, an annotated cable, none of them).
+runs `ariadne eval` with the model trained without that group (out/field-GROUP.onnx:
+training/train_field.py --holdout GROUP, quantized as the bundled one, by `make lobo`)
+and reports, on that group's photos only: weighted IoU (the paper's metric), cable
+recall, terminal recall and precision; with the network's ends, also what lies near the
+missed terminals (an end found a little too far away, the image border, nothing) and
+near the false ends (a terminal a little too far away, the border, an annotated cable,
+none of them).
 
     python3 scripts/lobo.py [--endpoints detect|gt] [--binary target/release/ariadne]
 """

@@ -8,7 +8,7 @@ probability of the two (more peaks) and averages the cable and direction channel
 with the offsets of the unmirrored pass. Same input and output as the network, so the
 engine runs it unchanged:
 
-    training/.venv/bin/python training/flip_average.py out/field-hard.pt --out out/flip-hard.onnx
+    training/.venv/bin/python training/flip_average.py out/field-hard-fp32.pt --out out/flip-hard.onnx
     python3 scripts/lobo.py --binary target/release/ariadne --models 'out/flip-{group}.onnx'
 
 Measured leave-one-background-out and not adopted (models/README.md, "Flip averaging").

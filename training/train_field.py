@@ -14,11 +14,12 @@ Training scenes (training/scenes.py) mix the development photos, their cables co
 onto procedural backgrounds, and procedurally drawn cables, with heavy photometric
 augmentation. Run from the repository root (see models/README.md, the model card):
 
-    python training/train_field.py --out models/cable_field.onnx              # all photos
-    python training/train_field.py --holdout wood --out out/field-wood.onnx  # one fold
+    python training/train_field.py --out models/cable_field_fp32.onnx              # all photos
+    python training/train_field.py --holdout wood --out out/field-wood-fp32.onnx  # one fold
 
 The bundled network's exact recipe is `make train-field` (it adds `--line-textures 0.15`);
-`make lobo` trains its folds.
+`make lobo` trains its folds. The export is the float network; the service runs it
+quantized to 8 bits (training/quantize_field.py, which both recipes call).
 
 The network (`--backbone lite0`, the default) is EfficientNet-Lite0's first stages with
 ImageNet weights and a small decoder (training/backbone.py); `--backbone none` is the
@@ -299,7 +300,7 @@ def main():
     ap.add_argument("--workers", type=int, default=1, help="processes making scenes")
     ap.add_argument("--device", default="cpu",
                     help="where the network trains: cpu (the recipe's figures) or cuda")
-    ap.add_argument("--out", default="models/cable_field.onnx")
+    ap.add_argument("--out", default="models/cable_field_fp32.onnx")
     ap.add_argument("--scene-hash", type=int, default=0, metavar="N",
                     help="print the MD5 of the first N training batches and stop")
     args = ap.parse_args()
