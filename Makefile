@@ -62,6 +62,7 @@ quantize-field: calibration
 # Drawn scenes that set the quantized networks' activation ranges (a seed no
 # evaluation uses).
 calibration:
+	rm -rf out/calibration
 	training/.venv/bin/python scripts/stress.py out/calibration --seed 40 --per-kind 4
 
 # The training scenes are still those the bundled model saw (models/README.md).
