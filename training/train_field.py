@@ -275,10 +275,10 @@ def main():
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--lr", type=float, default=4e-3)
     ap.add_argument("--width", type=int, default=32, help="channels of the body")
-    ap.add_argument("--backbone", choices=["none", "lite0"], default="lite0",
+    ap.add_argument("--backbone", choices=["none", "lite0", "lite0-deep"], default="lite0",
                     help="lite0 (the bundled model): EfficientNet-Lite0's first stages, "
-                         "ImageNet weights (training/backbone.py); none: FieldNet from "
-                         "scratch")
+                         "ImageNet weights (training/backbone.py); lite0-deep: and its "
+                         "stride-16 blocks as context; none: FieldNet from scratch")
     ap.add_argument("--real", type=float, default=0.25, help="share of unmodified photos")
     ap.add_argument("--composed", type=float, default=0.45,
                     help="share of photo cables on procedural backgrounds")
@@ -326,8 +326,8 @@ def main():
         print(f"scenes {scene_hash(train, args)}", flush=True)
         return
 
-    if args.backbone == "lite0":
-        model = LiteFieldNet(CHANNELS, args.width)
+    if args.backbone.startswith("lite0"):
+        model = LiteFieldNet(CHANNELS, args.width, deep=args.backbone == "lite0-deep")
         model.load_pretrained()
         model.freeze_early()
         # the pretrained blocks that train move at a quarter of the new layers' rate
