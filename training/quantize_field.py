@@ -3,9 +3,10 @@
 The service runs the network on one core for every photo (about 6 ms of ONNX Runtime in
 float at 320x240 on the development machine). Static quantization (ONNX QDQ: int8
 weights per output channel, uint8 activations whose ranges are read on calibration
-scenes, each cut at the 99.999th percentile of its histogram) runs the middle of the network with integer kernels, about 40 % faster there
-(models/README.md, "8-bit weights and activations"). Three parts stay in float, each for
-a measured reason:
+scenes, each cut at the 99.999th percentile of its histogram) runs the middle of the
+network with integer kernels: the whole network about 40 % faster (models/README.md,
+"8-bit weights and activations"). Two parts stay in float, each for a measured
+reason:
 
 - the input normalisation, the stem and the first inverted-residual block: at full and
   half resolution on three to 32 channels, where integer kernels gained no time and the
