@@ -41,17 +41,18 @@ from onnxruntime.quantization import (CalibrationDataReader, CalibrationMethod, 
                                       QuantType, quant_pre_process, quantize_static)
 from PIL import Image
 
+import scenes
+from train_field import to_tensor
+
 # Node-name prefixes (as `torch.onnx.export` names LiteFieldNet's layers) kept in float.
 FLOAT_NODES = ("/Sub", "/Div", "/_conv_stem/", "/_blocks.0/", "/fuse/", "/head/",
                "/Slice", "/Sigmoid", "/Tanh", "/Concat")
-# The network's input for a 640x480 photo (the service feeds half its working size).
-INPUT_SIZE = (320, 240)
 
 
 def network_input(path: Path) -> np.ndarray:
     """A scene as the network's input: [1, 3, H, W] float RGB in [0, 1]."""
-    image = Image.open(path).convert("RGB").resize(INPUT_SIZE, Image.BILINEAR)
-    return np.asarray(image, np.float32).transpose(2, 0, 1)[None] / 255.0
+    image = Image.open(path).convert("RGB").resize((scenes.IN_W, scenes.IN_H), Image.BILINEAR)
+    return to_tensor(np.asarray(image))[None]
 
 
 class Scenes(CalibrationDataReader):
