@@ -11,7 +11,6 @@
 //! [`traces`] follows the field from ends no walk found a cable from, from the
 //! frame's edge and on from where a walk was lost,
 //! [`twins`] splits a cable found over two of one colour laid together,
-//! [`families`] drops the families of straight lines a textured surface shows,
 //! [`geometry`] holds the plane geometry they share, and [`exposure`] brightens a dim
 //! photo and [`sharpness`] sharpens a soft one (the pipeline calls them); [`field`] reads a network's cable
 //! field (cable probability and direction), which, when given, joins the step score,
@@ -27,7 +26,6 @@ pub mod connectivity;
 mod deadline;
 mod error;
 pub mod exposure;
-mod families;
 pub mod field;
 pub mod geometry;
 pub mod graph;
@@ -351,7 +349,6 @@ pub fn segment_oversegmented(
     }
     if field.is_some() {
         cable::drop_short_weak(&mut cables, &mut end_cables, params);
-        families::drop_line_families(&mut cables, &mut end_cables, params);
     }
 
     Ok(Segmentation {

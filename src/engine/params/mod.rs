@@ -401,15 +401,6 @@ pub struct Params {
     pub field_pair_short_min_score: f32,
     /// Length below which [`Params::field_pair_short_min_score`] applies, nominal widths.
     pub field_pair_short_widths: f32,
-    /// With a field, the size of a family of straight lines: where found cables, each
-    /// straight, of one colour and running one way, lie in this many lanes or more
-    /// across (the joints of a brick wall, the lines of a printed page; twins laid
-    /// together are one lane), those of them that have at most one end on a given end
-    /// and score under [`Params::field_line_family_max_score`] are dropped
-    /// (docs/ENGINE.md, "Families of straight lines"). 0: none dropped.
-    pub field_line_family: u32,
-    /// Score under which a member of such a family is dropped.
-    pub field_line_family_max_score: f32,
     /// Mean cable probability from which a superpixel no cable explains counts as part
     /// of a piece of cable whose ends were missed; the ends of such pieces are seeds
     /// (docs/ENGINE.md). 1 or more: no such seeds.
@@ -538,8 +529,6 @@ impl Default for Params {
             field_short_widths: 20.0,
             field_pair_short_min_score: 0.2,
             field_pair_short_widths: 25.0,
-            field_line_family: 4,
-            field_line_family_max_score: 0.3,
             field_reached_floor: 0.7,
             field_orphan_level: 0.5,
             field_orphan_min_steps: 6.0,

@@ -124,8 +124,6 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_short_widths", 0.0, 1000.0),
     ("field_pair_short_min_score", 0.0, 1.0),
     ("field_pair_short_widths", 0.0, 1000.0),
-    ("field_line_family", 0.0, 1000.0),
-    ("field_line_family_max_score", 0.0, 1.0),
     ("field_reached_floor", 0.0, 1.0),
     ("field_orphan_level", 0.0, 1.0),
     ("field_orphan_min_steps", 1.0, 1000.0),
