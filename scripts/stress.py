@@ -11,7 +11,9 @@ side, 0-4 px apart (`pairs`), cables that loop over themselves once (`loops`, a 
 wide (`mixed`); cables casting soft shadows on textured surfaces (`textured`: a
 cutting mat's grid, perforated metal, cork or granite, planks, twill, tiles); and
 crowded tables (`crowded`: 6-10 cables, as many as the development photos hold, 4-10
-with a median of 7, where the other kinds draw 2-5). One folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its own row:
+with a median of 7, where the other kinds draw 2-5); with `--bundles`, last, 3-6 wires of
+one colour laid side by side, 0.5-4 widths apart, through the frame or leaving it
+(`bundles`: wires leaving a duct). One folder per kind, so that `ariadne eval --dataset DIR` reports each kind on its own row:
 
     training/.venv/bin/python scripts/stress.py /tmp/stress
     target/release/ariadne eval --dataset /tmp/stress --endpoints detect
@@ -85,10 +87,10 @@ CABLE_COLOURS = [
 ]
 
 
-def smooth_path(rng, start, heading, steps):
+def smooth_path(rng, start, heading, steps, bend=1.0):
     """A path of 1 px steps from `start`, its heading driven by three slow sines (the
-    tightest bends about 40 px in radius)."""
-    waves = [(rng.uniform(-0.9, 0.9) / (k + 1), rng.uniform(0.5, 2.0) * (k + 1),
+    tightest bends about 40 px in radius, `bend` times their amplitude)."""
+    waves = [(bend * rng.uniform(-0.9, 0.9) / (k + 1), rng.uniform(0.5, 2.0) * (k + 1),
               rng.uniform(0.0, 2 * math.pi)) for k in range(3)]
     p = np.array(start, dtype=float)
     points = [p.copy()]
@@ -329,6 +331,36 @@ def parallel(path, offset):
     return moved[best[1]:best[1] + best[0]]
 
 
+def add_bundle(rng, draw, lines):
+    """3-6 straight or gently bent wires of one colour laid side by side, 0.5-4 widths
+    apart, through the frame or leaving it at one end (their ends in view staggered,
+    each with a metal terminal): wires leaving a duct or a harness."""
+    while True:
+        side = rng.integers(4)
+        start = [(rng.uniform(160, W - 160), 0.0), (W - 1.0, rng.uniform(160, H - 160)),
+                 (rng.uniform(160, W - 160), H - 1.0), (0.0, rng.uniform(160, H - 160))][side]
+        heading = [math.pi / 2, math.pi, -math.pi / 2, 0.0][side] + rng.uniform(-0.4, 0.4)
+        # Begun 150 px outside the frame, so that every wire, cut to the frame by
+        # `parallel`, enters it at its edge.
+        back = np.array(start) - 150.0 * np.array([math.cos(heading), math.sin(heading)])
+        base = smooth_path(rng, back, heading, 1600, bend=0.3)
+        if sum(inside(p, 0.0) for p in base) > 250:
+            break
+    count = int(rng.integers(3, 7))
+    colour = CABLE_COLOURS[rng.integers(len(CABLE_COLOURS))]
+    width = rng.uniform(7.0, 11.0)
+    pitch = width * rng.uniform(1.5, 5.0)
+    ending = rng.random() < 0.5
+    for k in range(count):
+        line = parallel(base, (k - (count - 1) / 2) * pitch)
+        if ending:
+            cut = int(len(line) * rng.uniform(0.45, 0.7))
+            line = line[:cut]
+        if len(line) > 100:
+            draw_cable(draw, line, colour, width)
+            lines.append((line, MASK_WIDTH))
+
+
 def scene(rng, kind):
     """A photo of `kind` and its centrelines with their mask widths: a background kind
     with cables 7-11 px wide; `thin`, rods 3-5 px wide; `pairs`, one or two pairs of
@@ -361,9 +393,11 @@ def scene(rng, kind):
         add_cables(rng, draw, lines, int(rng.integers(1, 3)), loop_cable, (7.0, 11.0))
     if kind == "crowded":
         add_cables(rng, draw, lines, int(rng.integers(6, 11)), any_cable, (7.0, 11.0))
+    if kind == "bundles":
+        add_bundle(rng, draw, lines)
     if kind in ("mixed", "crowded"):
         extra = 0
-    elif kind in ("pairs", "loops"):
+    elif kind in ("pairs", "loops", "bundles"):
         extra = rng.integers(0, 3)
     else:
         extra = rng.integers(2, 6)
@@ -407,6 +441,8 @@ def main():
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--photos", type=Path,
                     help="a folder of photographs: adds the `photo` kind, cables on them")
+    ap.add_argument("--bundles", action="store_true",
+                    help="adds the `bundles` kind, drawn last: wires of one colour side by side")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     photos = []
@@ -414,7 +450,8 @@ def main():
         photos = sorted(p for p in args.photos.iterdir()
                         if p.suffix.lower() in (".png", ".jpg", ".jpeg"))
     sources = []
-    for kind in KINDS + (["photo"] if photos else []) + LATE_KINDS:
+    extra = ["bundles"] if args.bundles else []
+    for kind in KINDS + (["photo"] if photos else []) + LATE_KINDS + extra:
         folder = args.out / kind
         folder.mkdir(parents=True, exist_ok=True)
         for i in range(2 * len(photos) if kind == "photo" else args.per_kind):
@@ -437,7 +474,7 @@ def main():
                 mask([line]).save(folder / f"{name}_mask_{k}.png")
     if sources:
         (args.out / "photo-backgrounds.tsv").write_text("".join(sources))
-    count = (len(KINDS) + len(LATE_KINDS)) * args.per_kind + 2 * len(photos)
+    count = (len(KINDS) + len(LATE_KINDS) + len(extra)) * args.per_kind + 2 * len(photos)
     print(f"{count} photos under {args.out}")
 
 

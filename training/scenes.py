@@ -149,6 +149,14 @@ ABUTTING = 0.0
 PHOTO_TEXTURES = 0.0
 BACKGROUND_PHOTOS: list[np.ndarray] = []
 
+# Chance that a procedural cable comes with 2-4 more of its colour laid beside it, one
+# after another, 0.6-3 widths of gap apart (train_field.py's
+# `--bundles`): wires leaving a duct or a harness side by side. Without them the only
+# straight, parallel, evenly spaced lines the network saw were masonry joints, and it
+# reads real wires so laid weakly (docs/ACCURACY.md, "Families of straight lines
+# dropped").
+BUNDLES = 0.0
+
 
 def load_background_photos(folder: Path) -> list[np.ndarray]:
     """Every JPEG and PNG photograph in `folder`, as RGB arrays, in name order."""
@@ -512,6 +520,27 @@ def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
             n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-9
             gap = width + rng.uniform(0, 3)
             draw_cable(scene, path + n * gap, rng, colour * rng.uniform(0.9, 1.1), width)
+        if option_drawn(rng, BUNDLES):
+            add_bundle(scene, rng, path, colour, width)
+
+
+def add_bundle(scene: Scene, rng: random.Random, path: np.ndarray, colour, width: float):
+    """Draws 2-4 cables of `colour` beside `path`, on one side, each `width` wide and
+    0.6-3 widths of gap from the last, their ends staggered; one whose course would
+    fold over itself (offset further than the path bends) ends the bundle."""
+    t = np.gradient(path, axis=0)
+    t /= np.linalg.norm(t, axis=1, keepdims=True) + 1e-9
+    n = np.stack([-t[:, 1], t[:, 0]], 1) * rng.choice([-1.0, 1.0])
+    pitch = width * rng.uniform(1.6, 4.0)
+    for k in range(1, rng.randrange(3, 6)):
+        line = path + n * pitch * k
+        step = np.diff(line, axis=0)
+        step /= np.linalg.norm(step, axis=1, keepdims=True) + 1e-9
+        if (np.sum(step[1:] * step[:-1], axis=1) < 0.7).any():
+            break
+        cut = int(rng.uniform(0, 0.15) * len(line))
+        line = line[cut:] if rng.random() < 0.5 else line[: len(line) - cut]
+        draw_cable(scene, line, rng, colour * rng.uniform(0.9, 1.1), width)
 
 
 # ---------------------------------------------------------------------------------------

@@ -266,6 +266,8 @@ SCENE_SHARES = (
      "chance that a procedural cable drawn after another ends against it"),
     ("--photo-textures", "PHOTO_TEXTURES",
      "share of procedural backgrounds cropped from --background-photos"),
+    ("--bundles", "BUNDLES",
+     "chance that a procedural cable comes with 2-4 more of its colour laid beside it"),
 )
 
 
