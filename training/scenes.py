@@ -150,11 +150,10 @@ PHOTO_TEXTURES = 0.0
 BACKGROUND_PHOTOS: list[np.ndarray] = []
 
 # Chance that a procedural cable comes with 2-4 more of its colour laid beside it, one
-# after another, 0.6-3 widths of gap apart (train_field.py's
-# `--bundles`): wires leaving a duct or a harness side by side. Without them the only
-# straight, parallel, evenly spaced lines the network saw were masonry joints, and it
-# reads real wires so laid weakly (docs/ACCURACY.md, "Families of straight lines
-# dropped").
+# after another, 0.6-3 widths of gap apart (train_field.py's `--bundles`): wires leaving
+# a duct or a harness side by side. Without them the only straight, parallel, evenly
+# spaced lines the network saw were masonry joints, and it reads real wires so laid
+# weakly (models/README.md, "Wires laid side by side").
 BUNDLES = 0.0
 
 
