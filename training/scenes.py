@@ -498,6 +498,13 @@ def abut(path: np.ndarray, width: float, lines: list, rng: random.Random):
     return path + (anchor + side - path[-1])
 
 
+def unit_normals(path: np.ndarray) -> np.ndarray:
+    """The unit normal of `path` at each of its points (its tangent turned 90°)."""
+    t = np.gradient(path, axis=0)
+    n = np.stack([-t[:, 1], t[:, 0]], 1)
+    return n / (np.linalg.norm(n, axis=1, keepdims=True) + 1e-9)
+
+
 def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
     """Draws `count` procedural cables; with `camouflage` the first wears the colour of
     the background it lies on; with chance `ABUTTING` each ends against a cable already
@@ -514,11 +521,9 @@ def add_cables(scene: Scene, rng: random.Random, count: int, camouflage=False):
             colour = near_colour(rng, colour_along(scene.rgb, path))
         draw_cable(scene, path, rng, colour, width, tipped=tipped)
         if rng.random() < 0.25:  # a twin of the same colour alongside
-            t = np.gradient(path, axis=0)
-            n = np.stack([-t[:, 1], t[:, 0]], 1)
-            n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-9
             gap = width + rng.uniform(0, 3)
-            draw_cable(scene, path + n * gap, rng, colour * rng.uniform(0.9, 1.1), width)
+            draw_cable(scene, path + unit_normals(path) * gap, rng,
+                       colour * rng.uniform(0.9, 1.1), width)
         if option_drawn(rng, BUNDLES):
             add_bundle(scene, rng, path, colour, width)
 
@@ -527,9 +532,7 @@ def add_bundle(scene: Scene, rng: random.Random, path: np.ndarray, colour, width
     """Draws 2-4 cables of `colour` beside `path`, on one side, each `width` wide and
     0.6-3 widths of gap from the last, their ends staggered; one whose course would
     fold over itself (offset further than the path bends) ends the bundle."""
-    t = np.gradient(path, axis=0)
-    t /= np.linalg.norm(t, axis=1, keepdims=True) + 1e-9
-    n = np.stack([-t[:, 1], t[:, 0]], 1) * rng.choice([-1.0, 1.0])
+    n = unit_normals(path) * rng.choice([-1.0, 1.0])
     pitch = width * rng.uniform(1.6, 4.0)
     for k in range(1, rng.randrange(3, 6)):
         line = path + n * pitch * k
