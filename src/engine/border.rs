@@ -71,7 +71,7 @@ pub(super) fn border_crossing_cables(
         // a cable between two ends (the synthetic `Loop`: the walk ran along the outer
         // side of its wide bends); as a piece of field there may lead on to a cable
         // of its own, such a repeat must lie all but wholly on those cables.
-        let half_width = |f: &Cable| 0.5 * f.width_px.max(p.nominal_width_px);
+        let half_width = |f: &Cable| half_width(f, p);
         let ended_lines: Vec<(&[[f32; 2]], f32)> = ended
             .iter()
             .map(|f| (&f.polyline[..], half_width(f)))
@@ -93,6 +93,81 @@ pub(super) fn border_crossing_cables(
 /// Least share of a cable walked from the field's pieces that must lie on cables
 /// between ends for it to repeat them.
 const ENDED_REPEAT_SHARE: f32 = 0.9;
+
+/// How far from a cable's centreline another runs along it: half its width, or half
+/// the nominal width for a thinner one.
+fn half_width(cable: &Cable, p: &Params) -> f32 {
+    0.5 * cable.width_px.max(p.nominal_width_px)
+}
+
+/// How many times a weak cable's score the cable that takes its place must score
+/// ([`yield_weak_cables`]).
+const YIELD_SCORE_RATIO: f32 = 2.0;
+
+/// How many times a weak cable's length the cable that takes its place must be: it
+/// must run on well past the weak cable.
+const YIELD_LENGTH_RATIO: f32 = 1.3;
+
+/// With a field, which cables of `cables` give way to a whole cable they lie on. The
+/// weak ones are those from one end (the other at the border or lost) scoring under
+/// `field_weak_cable_score`, made from the pairings of `chosen` that `weak_choice`
+/// flags. [`border_crossing_cables`] is run again as if they were not there; a cable it
+/// finds that is not weak itself and that `found` (what the first run found) does not
+/// already hold takes the place of every weak cable lying along it, where it scores
+/// [`YIELD_SCORE_RATIO`] times as well and is [`YIELD_LENGTH_RATIO`] times as long. It joins `found`, and the pieces of
+/// it there are dropped. The walk from a weak false end (a knot in wood) that ran onto
+/// a cable crossing the frame covers that cable's border seed, and weak ends walked the
+/// wrong way cover the field's pieces along a cable whose ends were missed, so the
+/// first run finds only the rest of such a cable, or nothing. One flag per cable: true
+/// where it gave way.
+pub(super) fn yield_weak_cables(
+    scene: &Scene<'_>,
+    (chosen, weak_choice): (&[Pairing], &[bool]),
+    cables: &[Cable],
+    found: &mut Vec<Cable>,
+) -> Result<Vec<bool>, EngineError> {
+    let p = scene.terrain.params;
+    let weak =
+        |c: &Cable| c.score < p.field_weak_cable_score && c.end_indices.iter().any(Option::is_none);
+    let mut gone = vec![false; cables.len()];
+    if scene.field.is_none() || !cables.iter().any(weak) {
+        return Ok(gone);
+    }
+    let strong_choices: Vec<Pairing> = chosen
+        .iter()
+        .zip(weak_choice)
+        .filter(|&(_, &w)| !w)
+        .map(|(c, _)| *c)
+        .collect();
+    let strong: Vec<Cable> = cables.iter().filter(|c| !weak(c)).cloned().collect();
+    for crossing in border_crossing_cables(scene, &strong_choices, &strong)? {
+        let half = half_width(&crossing, p);
+        if crossing.score < p.field_weak_cable_score
+            || found
+                .iter()
+                .any(|f| runs_along(&crossing.polyline, &f.polyline, half_width(f, p)))
+        {
+            continue;
+        }
+        let mut took = false;
+        for (cable, gone) in cables.iter().zip(gone.iter_mut()) {
+            if !*gone
+                && weak(cable)
+                && crossing.score >= YIELD_SCORE_RATIO * cable.score
+                && crossing.length_px >= YIELD_LENGTH_RATIO * cable.length_px
+                && runs_along(&cable.polyline, &crossing.polyline, half)
+            {
+                *gone = true;
+                took = true;
+            }
+        }
+        if took {
+            found.retain(|f| !runs_along(&f.polyline, &crossing.polyline, half));
+            found.push(crossing);
+        }
+    }
+    Ok(gone)
+}
 
 /// Marks the superpixels of the `chosen` walks, and their neighbours, as `covered`.
 fn cover(covered: &mut [bool], graph: &Graph, walks: &[Walk], chosen: &[Pairing]) {

@@ -276,6 +276,8 @@ pub fn segment_oversegmented(
 
     let t = Instant::now();
     let mut cables = Vec::with_capacity(chosen.len());
+    // Per pairing: whether it became a cable under `field_weak_cable_score`.
+    let mut weak_choice = vec![false; chosen.len()];
     let mut end_cables = vec![None; ends.len()];
     let scene = Scene {
         walks: &walks,
@@ -285,7 +287,7 @@ pub fn segment_oversegmented(
         sp: &sp,
         image,
     };
-    for choice in &chosen {
+    for (choice, weak) in chosen.iter().zip(weak_choice.iter_mut()) {
         deadline.check()?;
         let Some(mut cable) = cable::model_cable(&scene, choice) else {
             continue;
@@ -296,6 +298,8 @@ pub fn segment_oversegmented(
         {
             continue;
         }
+        *weak = cable.score < params.field_weak_cable_score
+            && cable.end_indices.iter().any(Option::is_none);
         cable.id = cables.len();
         for i in cable.end_indices.into_iter().flatten() {
             end_cables[i] = Some(cable.id);
@@ -307,7 +311,11 @@ pub fn segment_oversegmented(
     if params.border_cables {
         let t = Instant::now();
         deadline.check()?;
-        let found = border::border_crossing_cables(&scene, &chosen, &cables)?;
+        let mut found = border::border_crossing_cables(&scene, &chosen, &cables)?;
+        let gone = border::yield_weak_cables(&scene, (&chosen, &weak_choice), &cables, &mut found)?;
+        if gone.contains(&true) {
+            cable::drop_cables(&mut cables, &mut end_cables, &gone);
+        }
         for mut cable in found {
             cable.id = cables.len();
             cables.push(cable);

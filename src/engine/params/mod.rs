@@ -372,6 +372,15 @@ pub struct Params {
     /// over the background out, so weaker cables (a pale cable on a pale card, whose
     /// lateral contrast is low) can be kept.
     pub field_min_cable_score: f32,
+    /// With a field, a cable from one end (the other at the border or lost) scoring
+    /// under this gives way to a cable found from the border or the field's pieces as
+    /// if it were not there, where that cable runs along it, scores at least this and
+    /// twice as well, and is a third longer. The walk from a weak false end (a knot in wood, a
+    /// fleck of a print) or a weak end walked the wrong way can run onto a cable, cover
+    /// its border seed or the field's pieces along it, and leave only the rest of it to
+    /// be found, or nothing (docs/ENGINE.md, "A weak end's cable that a whole one runs
+    /// along"). 0: never.
+    pub field_weak_cable_score: f32,
     /// Share of `field_min_cable_score` that a cable from an end needs when it arrives
     /// at another end of confidence 1, walked there or joined across a gap to a walk
     /// from it; at an end of confidence c the floor is multiplied by 1 - c (1 - this).
@@ -525,6 +534,7 @@ impl Default for Params {
             field_border_min_score: 0.12,
             field_border_sure_level: 0.7,
             field_min_cable_score: 0.03,
+            field_weak_cable_score: 0.1,
             field_short_min_score: 0.08,
             field_short_widths: 20.0,
             field_pair_short_min_score: 0.2,

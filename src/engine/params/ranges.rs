@@ -120,6 +120,7 @@ pub const RANGES: &[(&str, f64, f64)] = &[
     ("field_border_min_score", 0.0, 1.0),
     ("field_border_sure_level", 0.0, 1.0),
     ("field_min_cable_score", 0.0, 1.0),
+    ("field_weak_cable_score", 0.0, 1.0),
     ("field_short_min_score", 0.0, 1.0),
     ("field_short_widths", 0.0, 1000.0),
     ("field_pair_short_min_score", 0.0, 1.0),
