@@ -108,18 +108,25 @@ const YIELD_SCORE_RATIO: f32 = 2.0;
 /// must run on well past the weak cable.
 const YIELD_LENGTH_RATIO: f32 = 1.3;
 
-/// With a field, which cables of `cables` give way to a whole cable they lie on. The
-/// weak ones are those from one end (the other at the border or lost) scoring under
-/// `field_weak_cable_score`, made from the pairings of `chosen` that `weak_choice`
-/// flags. [`border_crossing_cables`] is run again as if they were not there; a cable it
-/// finds that is not weak itself and that `found` (what the first run found) does not
-/// already hold takes the place of every weak cable lying along it, where it scores
-/// [`YIELD_SCORE_RATIO`] times as well and is [`YIELD_LENGTH_RATIO`] times as long. It joins `found`, and the pieces of
-/// it there are dropped. The walk from a weak false end (a knot in wood) that ran onto
-/// a cable crossing the frame covers that cable's border seed, and weak ends walked the
-/// wrong way cover the field's pieces along a cable whose ends were missed, so the
-/// first run finds only the rest of such a cable, or nothing. One flag per cable: true
-/// where it gave way.
+/// Whether a cable from the ends is weak enough to give way to a whole cable it lies
+/// on ([`yield_weak_cables`]): from one end only (the other at the border or lost), and
+/// scoring under `field_weak_cable_score`. A cable between two ends is confirmed by
+/// both.
+pub(super) fn is_weak(cable: &Cable, p: &Params) -> bool {
+    cable.score < p.field_weak_cable_score && cable.end_indices.iter().any(Option::is_none)
+}
+
+/// With a field, which cables of `cables` give way to a whole cable they lie on: the
+/// weak ones ([`is_weak`]), made from the pairings of `chosen` that `weak_choice`
+/// flags. [`border_crossing_cables`] is run again as if they were not there; a cable
+/// it finds that is not weak itself and that `found` (what the first run found) does
+/// not already hold takes the place of every weak cable lying along it, where it
+/// scores [`YIELD_SCORE_RATIO`] times as well and is [`YIELD_LENGTH_RATIO`] times as
+/// long. It joins `found`, and the pieces of it there are dropped. The walk from a
+/// weak false end (a knot in wood) that ran onto a cable crossing the frame covers
+/// that cable's border seed, and weak ends walked the wrong way cover the field's
+/// pieces along a cable whose ends were missed, so the first run finds only the rest
+/// of such a cable, or nothing. One flag per cable: true where it gave way.
 pub(super) fn yield_weak_cables(
     scene: &Scene<'_>,
     (chosen, weak_choice): (&[Pairing], &[bool]),
@@ -127,8 +134,7 @@ pub(super) fn yield_weak_cables(
     found: &mut Vec<Cable>,
 ) -> Result<Vec<bool>, EngineError> {
     let p = scene.terrain.params;
-    let weak =
-        |c: &Cable| c.score < p.field_weak_cable_score && c.end_indices.iter().any(Option::is_none);
+    let weak = |c: &Cable| is_weak(c, p);
     let mut gone = vec![false; cables.len()];
     if scene.field.is_none() || !cables.iter().any(weak) {
         return Ok(gone);

@@ -276,7 +276,7 @@ pub fn segment_oversegmented(
 
     let t = Instant::now();
     let mut cables = Vec::with_capacity(chosen.len());
-    // Per pairing: whether it became a cable under `field_weak_cable_score`.
+    // Per pairing: whether it became a weak cable (`border::is_weak`).
     let mut weak_choice = vec![false; chosen.len()];
     let mut end_cables = vec![None; ends.len()];
     let scene = Scene {
@@ -298,8 +298,7 @@ pub fn segment_oversegmented(
         {
             continue;
         }
-        *weak = cable.score < params.field_weak_cable_score
-            && cable.end_indices.iter().any(Option::is_none);
+        *weak = border::is_weak(&cable, params);
         cable.id = cables.len();
         for i in cable.end_indices.into_iter().flatten() {
             end_cables[i] = Some(cable.id);

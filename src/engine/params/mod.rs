@@ -375,11 +375,11 @@ pub struct Params {
     /// With a field, a cable from one end (the other at the border or lost) scoring
     /// under this gives way to a cable found from the border or the field's pieces as
     /// if it were not there, where that cable runs along it, scores at least this and
-    /// twice as well, and is a third longer. The walk from a weak false end (a knot in wood, a
-    /// fleck of a print) or a weak end walked the wrong way can run onto a cable, cover
-    /// its border seed or the field's pieces along it, and leave only the rest of it to
-    /// be found, or nothing (docs/ENGINE.md, "A weak end's cable that a whole one runs
-    /// along"). 0: never.
+    /// twice as well, and is a third longer. The walk from a weak false end (a knot in
+    /// wood, a fleck of a print) or a weak end walked the wrong way can run onto a
+    /// cable, cover its border seed or the field's pieces along it, and leave only the
+    /// rest of it to be found, or nothing (docs/ENGINE.md, "A weak end's cable that a
+    /// whole one runs along"). 0: never.
     pub field_weak_cable_score: f32,
     /// Share of `field_min_cable_score` that a cable from an end needs when it arrives
     /// at another end of confidence 1, walked there or joined across a gap to a walk
