@@ -28,9 +28,8 @@ from PIL import Image
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "training"))
 from groups import background_group  # noqa: E402
-from scenes import read_lines  # noqa: E402
+from scenes import BORDER_TOLERANCE_PX, read_lines  # noqa: E402
 
-BORDER_TOLERANCE_PX = 12  # ariadne eval's: ends nearer the border are not terminals
 TERMINAL_MATCH_PX = 15.0  # ariadne eval's matching radius
 NEAR_PX = 30.0  # a reported end this near a terminal is read as marking it
 DIRECTION_PX = 15.0  # centreline length read back from an end for the cable's direction

@@ -387,18 +387,13 @@ fn a_weak_end_s_cable_gives_way_to_the_whole_cable_it_lies_on() {
             ..Params::preset("clutter").unwrap()
         };
         let out = common::photo_alone(&bytes, &network, &params, true);
-        let cables = &out.segmentation.cables;
-        let off: f32 = truth
+        let found: Vec<[f32; 2]> = out
+            .segmentation
+            .cables
             .iter()
-            .map(|&p| {
-                cables
-                    .iter()
-                    .flat_map(|c| c.polyline.iter())
-                    .map(|&q| geometry::dist(p, q))
-                    .fold(f32::MAX, f32::min)
-            })
-            .sum();
-        off / truth.len() as f32
+            .flat_map(|c| c.polyline.iter().copied())
+            .collect();
+        common::centreline_error(&truth, &found)
     };
     let (with, without) = (error(Params::default().field_weak_cable_score), error(0.0));
     eprintln!(

@@ -8,26 +8,13 @@ mod common;
 use ariadne_dlo::engine::{self, MaskKind, Params, render};
 use ariadne_dlo::eval;
 use ariadne_dlo::synth::{Background, SceneSpec, scene, turning};
+use common::centreline_error;
 
 fn mask_of(seg: &engine::Segmentation, width_px: f32) -> image::GrayImage {
     match render::render_mask(seg, MaskKind::Binary, width_px) {
         engine::Mask::Gray(m) => m,
         engine::Mask::Rgb(_) => unreachable!(),
     }
-}
-
-/// Mean distance from each true centreline point to the nearest found polyline point.
-fn centreline_error(truth: &[[f32; 2]], found: &[[f32; 2]]) -> f32 {
-    let total: f32 = truth
-        .iter()
-        .map(|p| {
-            found
-                .iter()
-                .map(|q| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
-                .fold(f32::MAX, f32::min)
-        })
-        .sum();
-    total / truth.len() as f32
 }
 
 #[test]

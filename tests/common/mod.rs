@@ -22,6 +22,20 @@ pub fn mask_iou(out: &pipeline::Output, truth: &GrayImage) -> f64 {
     eval::iou(mask(out), truth)
 }
 
+/// Mean distance from each true centreline point to the nearest found polyline point.
+pub fn centreline_error(truth: &[[f32; 2]], found: &[[f32; 2]]) -> f32 {
+    let total: f32 = truth
+        .iter()
+        .map(|p| {
+            found
+                .iter()
+                .map(|q| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
+                .fold(f32::MAX, f32::min)
+        })
+        .sum();
+    total / truth.len() as f32
+}
+
 /// Distance, pixels, from each point of the output's centrelines to the nearest of
 /// `truth` (points of the true centrelines, as dense as the distances should be exact).
 pub fn distances_to_truth(out: &pipeline::Output, truth: &[[f32; 2]]) -> Vec<f32> {
