@@ -387,13 +387,7 @@ fn a_weak_end_s_cable_gives_way_to_the_whole_cable_it_lies_on() {
             ..Params::preset("clutter").unwrap()
         };
         let out = common::photo_alone(&bytes, &network, &params, true);
-        let found: Vec<[f32; 2]> = out
-            .segmentation
-            .cables
-            .iter()
-            .flat_map(|c| c.polyline.iter().copied())
-            .collect();
-        common::centreline_error(&truth, &found)
+        common::centreline_error(&truth, &common::found_points(&out))
     };
     let (with, without) = (error(Params::default().field_weak_cable_score), error(0.0));
     eprintln!(

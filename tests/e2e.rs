@@ -188,12 +188,7 @@ fn terminals_with_an_end(ends: &[[f64; 2]], terminals: &[[f64; 2]], radius: f64)
 /// Share of the points of `scene`'s true centrelines within `within` pixels of a
 /// centreline found in `out`.
 fn covered_share(scene: &synth::Scene, out: &pipeline::Output, within: f32) -> f32 {
-    let found: Vec<[f32; 2]> = out
-        .segmentation
-        .cables
-        .iter()
-        .flat_map(|c| c.polyline.iter().copied())
-        .collect();
+    let found = common::found_points(out);
     let truth: Vec<[f32; 2]> = scene
         .cables
         .iter()

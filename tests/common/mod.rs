@@ -36,13 +36,20 @@ pub fn centreline_error(truth: &[[f32; 2]], found: &[[f32; 2]]) -> f32 {
     total / truth.len() as f32
 }
 
-/// Distance, pixels, from each point of the output's centrelines to the nearest of
-/// `truth` (points of the true centrelines, as dense as the distances should be exact).
-pub fn distances_to_truth(out: &pipeline::Output, truth: &[[f32; 2]]) -> Vec<f32> {
+/// The points of every centreline the output found, in one list.
+pub fn found_points(out: &pipeline::Output) -> Vec<[f32; 2]> {
     out.segmentation
         .cables
         .iter()
-        .flat_map(|c| c.polyline.iter())
+        .flat_map(|c| c.polyline.iter().copied())
+        .collect()
+}
+
+/// Distance, pixels, from each point of the output's centrelines to the nearest of
+/// `truth` (points of the true centrelines, as dense as the distances should be exact).
+pub fn distances_to_truth(out: &pipeline::Output, truth: &[[f32; 2]]) -> Vec<f32> {
+    found_points(out)
+        .iter()
         .map(|p| {
             truth
                 .iter()
